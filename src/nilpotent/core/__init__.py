@@ -1,0 +1,1 @@
+"""Symbolic, exact core of `nilpotent` (no numpy arrays, no matplotlib, no scipy)."""
