@@ -68,7 +68,8 @@ class ControlSystem:
         dup = sorted({c for c in names if names.count(c) > 1})
         if dup:
             raise ModelError(f"model {self.name!r}: duplicate coordinates {', '.join(dup)}")
-        flds = tuple(tuple(sp.sympify(e) for e in f) for f in self.fields)  # internal, not user text
+        # internal values (never user text: that goes through core.expressions)
+        flds = tuple(tuple(sp.S(e) for e in f) for f in self.fields)
         if not flds:
             raise ModelError(f"model {self.name!r}: no fields")
         for i, f in enumerate(flds, start=1):
@@ -77,7 +78,7 @@ class ControlSystem:
                     f"model {self.name!r}: field X{i} has {len(f)} components, "
                     f"expected {len(coords)} (one per coordinate)"
                 )
-        params = tuple((str(k), sp.sympify(v)) for k, v in dict(self.parameters).items())
+        params = tuple((str(k), sp.S(v)) for k, v in dict(self.parameters).items())
         clash = set(dict(params)) & set(names)
         if clash:
             raise ModelError(
@@ -120,7 +121,7 @@ class ControlSystem:
                 raise ModelError(
                     f"model {self.name!r} has no parameter {k!r} (parameters: {known})"
                 )
-            current[k] = sp.sympify(v)  # values are numbers, never user text
+            current[k] = sp.S(v)  # values are numbers, never user text
         return ControlSystem(
             self.name, self.coordinates, self.fields, tuple(current.items()), self.description
         )
@@ -135,7 +136,9 @@ class ControlSystem:
 
     def specialized(self) -> ControlSystem:
         """The same system with the parameters substituted (and then dropped)."""
-        return ControlSystem(self.name, self.coordinates, self.specialized_fields, (), self.description)
+        return ControlSystem(
+            self.name, self.coordinates, self.specialized_fields, (), self.description
+        )
 
     def field_matrix(self) -> sp.ImmutableMatrix:
         """The ``n × m`` matrix whose column ``i`` is ``X_{i+1}`` (parameters substituted)."""
@@ -144,7 +147,9 @@ class ControlSystem:
     def origin(self) -> tuple[Expr, ...]:
         return tuple(sp.Integer(0) for _ in self.coordinates)
 
-    def point(self, values: Sequence[object] | Mapping[str, object] | None = None) -> tuple[Expr, ...]:
+    def point(
+        self, values: Sequence[object] | Mapping[str, object] | None = None
+    ) -> tuple[Expr, ...]:
         """A point as a tuple of sympy numbers, from a sequence or a name→value mapping.
 
         Missing names are 0.  Numbers only (ints, fractions, floats, sympy
@@ -160,8 +165,8 @@ class ControlSystem:
                     f"model {self.name!r} has no coordinate {unknown[0]!r} "
                     f"(coordinates: {', '.join(names)})"
                 )
-            return tuple(sp.sympify(values.get(k, 0)) for k in names)
-        vals = tuple(sp.sympify(v) for v in values)
+            return tuple(sp.S(values.get(k, 0)) for k in names)
+        vals = tuple(sp.S(v) for v in values)
         if len(vals) != self.n:
             raise ModelError(f"a point of {self.name!r} has {self.n} coordinates, got {len(vals)}")
         return vals
