@@ -1,0 +1,246 @@
+"""Built-in models: a registry of driftless systems chosen by name.
+
+Families are data (one module per family: :mod:`~nilpotent.models.trident`,
+:mod:`~nilpotent.models.classic`, :mod:`~nilpotent.models.trailers`) plus this
+registry, which the CLI (``nilpotent models``), the docs and the tests all
+iterate over.
+
+* :data:`MODELS` maps a name to its :class:`ModelInfo`;
+* :func:`get_model` builds a built-in (``"unicycle"``, ``"car-trailers:3"``)
+  and applies parameter values;
+* :func:`load_system` accepts a built-in name or the path of a ``.toml`` /
+  ``.json`` model file (``INTERFACE.md``).
+
+Examples
+--------
+>>> get_model("car-trailers:2").coordinate_names
+('x', 'y', 'theta0', 'theta1', 'theta2')
+>>> get_model("trident-snake", {"l": 2}).parameter_values["l"]
+2
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+
+import sympy as sp
+
+from nilpotent.core.system import ControlSystem
+from nilpotent.errors import ModelError
+from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
+from nilpotent.models.trailers import car_trailers
+from nilpotent.models.trident import trident_snake, trident_snake_joints, trident_snake_paper
+
+__all__ = ["MAX_TRAILERS", "MODELS", "ModelInfo", "get_model", "list_models", "load_system"]
+
+#: Largest ``K`` accepted in ``car-trailers:K`` (the symbolic work grows quickly with K).
+MAX_TRAILERS = 50
+
+_MODEL_FILE_SUFFIXES = (".toml", ".json")
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    """One entry of the model registry.
+
+    Parameters
+    ----------
+    name:
+        Registry name (``"trident-snake"``, ``"car-trailers"``).
+    description:
+        One line for ``nilpotent models``.
+    parameters:
+        Parameter name → default value (exact sympy numbers).  For a family
+        with an argument (``car-trailers:K``) these are the defaults of the
+        model built with :attr:`default_argument`; :attr:`parameter_note`
+        states the general rule.
+    build:
+        ``build()`` (or ``build(K)`` when :attr:`argument` is set) returns the
+        :class:`~nilpotent.core.system.ControlSystem` with its default
+        parameter values.
+    argument:
+        Name of the integer argument written after a colon (``"K"`` for
+        ``car-trailers:K``), or ``None``.
+    default_argument:
+        The argument used by :attr:`example_spec`.
+    parameter_note:
+        Human-readable parameter rule for families (``"d1..dK = 1"``).
+    """
+
+    name: str
+    description: str
+    parameters: Mapping[str, sp.Expr]
+    build: Callable[..., ControlSystem] = field(repr=False)
+    argument: str | None = None
+    default_argument: int | None = None
+    parameter_note: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "parameters", MappingProxyType(dict(self.parameters)))
+
+    @property
+    def usage(self) -> str:
+        """How to name the model on the command line (``"car-trailers:K"``)."""
+        return f"{self.name}:{self.argument}" if self.argument else self.name
+
+    @property
+    def example_spec(self) -> str:
+        """A spec that :func:`get_model` accepts (``"car-trailers:1"``)."""
+        return f"{self.name}:{self.default_argument}" if self.argument else self.name
+
+    def parameter_summary(self) -> str:
+        """``"r=1, l=1"``, the family rule, or ``""`` when there are none."""
+        if self.parameter_note:
+            return self.parameter_note
+        return ", ".join(f"{k}={v}" for k, v in self.parameters.items())
+
+
+def _entry(
+    name: str,
+    build: Callable[..., ControlSystem],
+    *,
+    argument: str | None = None,
+    default_argument: int | None = None,
+    parameter_note: str = "",
+    description: str = "",
+) -> ModelInfo:
+    system = build(default_argument) if argument else build()
+    return ModelInfo(
+        name=name,
+        description=description or system.description,
+        parameters=dict(system.parameters),
+        build=build,
+        argument=argument,
+        default_argument=default_argument,
+        parameter_note=parameter_note,
+    )
+
+
+#: The built-in models, by registry name (``nilpotent models`` lists them in this order).
+MODELS: Mapping[str, ModelInfo] = MappingProxyType(
+    {
+        info.name: info
+        for info in (
+            _entry("trident-snake", trident_snake),
+            _entry("trident-snake-paper", trident_snake_paper),
+            _entry("trident-snake-joints", trident_snake_joints),
+            _entry("unicycle", unicycle),
+            _entry(
+                "car-trailers",
+                car_trailers,
+                argument="K",
+                default_argument=1,
+                parameter_note="d1..dK=1 (hitch lengths, one per trailer)",
+                description="unicycle car pulling K trailers hitched at the axle centres; "
+                "growth (2,3,...,K+3) at the origin",
+            ),
+            _entry("heisenberg", heisenberg),
+            _entry("engel", engel),
+            _entry("cartan", cartan),
+            _entry("martinet", martinet),
+        )
+    }
+)
+
+
+def list_models() -> tuple[ModelInfo, ...]:
+    """The registry entries, in display order.
+
+    Each carries ``name``, ``usage`` (``car-trailers:K``), ``parameters``
+    (defaults), ``parameter_summary()`` and the one-line ``description``.
+    """
+    return tuple(MODELS.values())
+
+
+def _known() -> str:
+    return ", ".join(info.usage for info in MODELS.values())
+
+
+def _parse_argument(spec: str, info: ModelInfo, text: str) -> int:
+    if not re.fullmatch(r"[0-9]+", text.strip()):
+        raise ModelError(
+            f"model {spec!r}: {info.argument} must be a positive integer "
+            f"(e.g. {info.example_spec}), got {text!r}"
+        )
+    value = int(text)
+    if value < 1 or value > MAX_TRAILERS:
+        raise ModelError(
+            f"model {spec!r}: {info.argument} must be between 1 and {MAX_TRAILERS}, got {value}"
+        )
+    return value
+
+
+def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlSystem:
+    """Build a built-in model by name and apply parameter values.
+
+    Parameters
+    ----------
+    spec:
+        A registry name (``"unicycle"``) or ``"NAME:K"`` for a family with an
+        integer argument (``"car-trailers:3"``, ``1 ≤ K ≤ MAX_TRAILERS``).
+    params:
+        Parameter values (sympy numbers) replacing the defaults.
+
+    Raises
+    ------
+    ModelError
+        Unknown name (the message lists the known ones), a bad or missing
+        argument, or an unknown parameter name.
+    """
+    name, sep, arg = spec.partition(":")
+    info = MODELS.get(name.strip())
+    if info is None:
+        raise ModelError(f"unknown model {spec!r}; known models: {_known()}")
+    if info.argument is None:
+        if sep:
+            raise ModelError(f"model {spec!r}: {info.name} takes no ':' argument")
+        system = info.build()
+    else:
+        if not sep:
+            raise ModelError(
+                f"model {spec!r} needs its argument: {info.usage} (e.g. {info.example_spec})"
+            )
+        system = info.build(_parse_argument(spec, info, arg))
+    if params:
+        system = system.with_parameters(dict(params))
+    return system
+
+
+def load_system(spec: str, params: Mapping[str, object] | None = None) -> ControlSystem:
+    """A built-in model by name, else a ``.toml`` / ``.json`` model file; then parameters.
+
+    Parameters
+    ----------
+    spec:
+        A built-in spec (see :func:`get_model`) or a path to a model file in
+        the ``INTERFACE.md`` format, read by
+        :func:`nilpotent.core.modelfile.load_model_file`.
+    params:
+        Parameter values applied with
+        :meth:`~nilpotent.core.system.ControlSystem.with_parameters`.
+
+    Raises
+    ------
+    ModelError
+        Neither a built-in nor an existing model file, or an unknown parameter.
+    """
+    if spec.partition(":")[0].strip() in MODELS:
+        return get_model(spec, params)
+    path = Path(spec)
+    if path.suffix.lower() not in _MODEL_FILE_SUFFIXES and not path.is_file():
+        raise ModelError(
+            f"unknown model {spec!r}: not a built-in (known models: {_known()}) "
+            "and not a model file (.toml or .json)"
+        )
+    if not path.is_file():
+        raise ModelError(f"model file {spec!r} not found")
+    from nilpotent.core.modelfile import load_model_file  # lazy: written alongside
+
+    system = load_model_file(path)
+    if params:
+        system = system.with_parameters(dict(params))
+    return system
