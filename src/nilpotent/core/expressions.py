@@ -299,14 +299,22 @@ class _Parser:
         return self.checked(value, node)
 
     def checked(self, value: sp.Expr, node: ast.AST) -> sp.Expr:
-        """Refuse undefined, infinite, complex or out-of-range results."""
-        if value.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
-            raise self.fail("undefined or infinite value", node)
-        if value.has(sp.I):
-            raise self.fail("complex value (expressions must be real)", node)
-        if value.is_Float and not math.isfinite(float(value)):
-            raise self.fail("number too large (outside the range of a double)", node)
+        """Refuse undefined, infinite, complex or out-of-range results.
+
+        sympy may move numbers around while evaluating (``exp(710.0 + x)`` becomes
+        ``exp(710.0)*exp(x)``), so the whole result is inspected, not only its head.
+        """
+        for part in sp.preorder_traversal(value):
+            if part in _UNDEFINED:
+                raise self.fail("undefined or infinite value", node)
+            if part is sp.I:
+                raise self.fail("complex value (expressions must be real)", node)
+            if part.is_Float and not math.isfinite(float(part)):
+                raise self.fail("number too large (outside the range of a double)", node)
         return value
+
+
+_UNDEFINED = (sp.zoo, sp.nan, sp.oo, -sp.oo)
 
 
 def _max_paren_depth(text: str) -> int:
