@@ -1,0 +1,168 @@
+"""Points and parameter assignments written by users: ``NAME=VALUE,NAME=VALUE``.
+
+A point (``--at``, ``--from``, ``--to``) names some coordinates of a system;
+the unnamed ones are 0.  Values go through the expression grammar
+(:func:`nilpotent.core.expressions.parse_expression`) with no names but ``pi``
+and ``E``, so they are constants: exact where written exactly (``pi/3``,
+``1/2``, ``sqrt(2)``), floats where written as decimals (``0.5``).  They must
+be finite real numbers.  Commas inside parentheses (``atan2(1, 2)``) belong to
+the value.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import sympy as sp
+
+from nilpotent.core.expressions import format_expression, parse_expression, real_value
+from nilpotent.core.system import ControlSystem
+from nilpotent.errors import ExpressionError, ModelError, NilpotentError, PointError
+
+__all__ = ["format_point", "parse_param_assignments", "parse_point"]
+
+
+def _split_top_level(text: str) -> list[str]:
+    """Split at the commas that are outside parentheses."""
+    parts, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append(text[start:i])
+            start = i + 1
+    parts.append(text[start:])
+    return parts
+
+
+def _assignments(
+    text: str, where: str, error: type[NilpotentError], example: str
+) -> list[tuple[str, sp.Expr]]:
+    """Parse ``NAME=VALUE,...`` into (name, constant value) pairs, in order."""
+    if not isinstance(text, str) or not text.strip():
+        raise error(f"{where}: empty; write NAME=VALUE pairs separated by commas, e.g. {example}")
+    out: list[tuple[str, sp.Expr]] = []
+    seen: set[str] = set()
+    for item in _split_top_level(text):
+        if not item.strip():
+            raise error(f"{where}: empty item in {text!r} (two commas, or a trailing comma?)")
+        name, eq, value = item.partition("=")
+        name, value = name.strip(), value.strip()
+        if not eq:
+            raise error(f"{where}: {item.strip()!r} in {text!r} has no '='; write NAME=VALUE, "
+                        f"e.g. {example}")
+        if not name:
+            raise error(f"{where}: missing name before '=' in {item.strip()!r} of {text!r}")
+        if not value:
+            raise error(f"{where}: empty value for {name!r} in {text!r}")
+        if name in seen:
+            raise error(f"{where}: {name!r} given twice in {text!r}")
+        seen.add(name)
+        place = f"{where} {name}"
+        try:
+            expr = parse_expression(value, {}, where=place)
+            real_value(expr, where=place)
+        except ExpressionError as exc:
+            raise error(str(exc)) from None
+        out.append((name, expr))
+    return out
+
+
+def parse_point(text: str, sys: ControlSystem, *, option: str = "--at") -> tuple[sp.Expr, ...]:
+    """Parse ``NAME=VALUE,...`` into a point of ``sys`` (unnamed coordinates are 0).
+
+    Parameters
+    ----------
+    text:
+        The option's value, e.g. ``"theta=pi/4,x=1/2"``.
+    sys:
+        The system whose coordinates are named.
+    option:
+        The option's name, put at the start of error messages.
+
+    Returns
+    -------
+    tuple of sympy.Expr
+        The point, aligned with ``sys.coordinates``; exact where the text is exact.
+
+    Raises
+    ------
+    PointError
+        Empty text, an item without ``=``, an empty value, an unknown or repeated
+        coordinate name, or a value that is not a finite real constant of the grammar.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x, y, th = sp.symbols("x y theta")
+    >>> s = ControlSystem("unicycle", (x, y, th), ((sp.cos(th), sp.sin(th), 0), (0, 0, 1)))
+    >>> parse_point("theta=pi/3, x=1/2", s)
+    (1/2, 0, pi/3)
+    """
+    names = sys.coordinate_names
+    example = f"{option} {names[0]}=1/2" + (f",{names[-1]}=pi/4" if len(names) > 1 else "")
+    values = dict.fromkeys(names, sp.Integer(0))
+    for name, expr in _assignments(text, option, PointError, example):
+        if name not in values:
+            raise PointError(
+                f"{option}: unknown coordinate {name!r} in {text!r} "
+                f"(coordinates of {sys.name}: {', '.join(names)})"
+            )
+        values[name] = expr
+    return tuple(values[n] for n in names)
+
+
+def parse_param_assignments(
+    items: Sequence[str], *, option: str = "--param"
+) -> dict[str, sp.Expr]:
+    """Parse repeated ``NAME=VALUE`` options (each may hold several, comma-separated).
+
+    Values are finite real constants of the grammar. Whether the names are
+    parameters of a model is checked where the model is known
+    (:meth:`ControlSystem.with_parameters`).
+
+    Raises
+    ------
+    ModelError
+        A malformed item, an empty value, a name that is not an identifier, a
+        name given twice, or a value that is not a finite real constant.
+
+    Examples
+    --------
+    >>> parse_param_assignments(["r=1/2", "l=sqrt(2)"])
+    {'r': 1/2, 'l': sqrt(2)}
+    """
+    if isinstance(items, str):
+        items = [items]
+    out: dict[str, sp.Expr] = {}
+    for item in items:
+        for name, expr in _assignments(item, option, ModelError, f"{option} r=1/2"):
+            if not name.isidentifier():
+                raise ModelError(f"{option}: {name!r} in {item!r} is not a parameter name")
+            if name in out:
+                raise ModelError(f"{option}: parameter {name!r} given twice")
+            out[name] = expr
+    return out
+
+
+def format_point(sys: ControlSystem, point: Sequence[sp.Basic]) -> dict[str, str]:
+    """The JSON ``point`` object: coordinate name → value as grammar text.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> x, y = sp.symbols("x y")
+    >>> format_point(ControlSystem("s", (x, y), ((1, 0),)), (sp.sqrt(3) / 2, 0))
+    {'x': 'sqrt(3)/2', 'y': '0'}
+    """
+    point = tuple(point)
+    if len(point) != sys.n:
+        raise PointError(
+            f"a point of {sys.name!r} has {sys.n} coordinates, got {len(point)}"
+        )
+    return {
+        name: format_expression(value)
+        for name, value in zip(sys.coordinate_names, point, strict=True)
+    }
