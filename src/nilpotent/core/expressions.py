@@ -146,8 +146,9 @@ class _Parser:
         self.where = where
 
     # --- errors -----------------------------------------------------------
-    def fail(self, problem: str, node: ast.AST | None = None) -> ExpressionError:
+    def fail(self, problem: str, node: ast.AST | None = None, hint: str = "") -> ExpressionError:
         prefix = f"{self.where}: " if self.where else ""
+        suffix = f" ({hint})" if hint else ""
         piece = None
         if node is not None:
             try:
@@ -155,8 +156,9 @@ class _Parser:
             except (ValueError, IndexError):  # pragma: no cover - positions always valid
                 piece = None
         if piece is not None and piece.strip() != self.text.strip():
-            return ExpressionError(f"{prefix}{problem}: {_shorten(piece)} in {_shorten(self.text)}")
-        return ExpressionError(f"{prefix}{problem} in {_shorten(self.text)}")
+            return ExpressionError(
+                f"{prefix}{problem}: {_shorten(piece)} in {_shorten(self.text)}{suffix}")
+        return ExpressionError(f"{prefix}{problem} in {_shorten(self.text)}{suffix}")
 
     def allowed_names(self) -> str:
         user = sorted(str(k) for k in self.names if k not in RESERVED_NAMES)
@@ -207,14 +209,14 @@ class _Parser:
     def name(self, node: ast.Name) -> sp.Expr:
         ident = node.id
         if ident.startswith("__") and ident.endswith("__"):
-            raise self.fail(f"the name {ident!r} is not allowed ({self.allowed_names()})", node)
+            raise self.fail(f"the name {ident!r} is not allowed", None, self.allowed_names())
         if ident in CONSTANTS:
             return CONSTANTS[ident]
         if ident in FUNCTIONS:
             raise self.fail(f"{ident!r} is a function: call it, as in {ident}(x)", node)
         if ident in self.names:
             return self.names[ident]
-        raise self.fail(f"unknown name {ident!r} ({self.allowed_names()})", node)
+        raise self.fail(f"unknown name {ident!r}", None, self.allowed_names())
 
     def binary_chain(self, node: ast.BinOp, depth: int) -> sp.Expr:
         # Left-associative chains (a + b - c + ...) are walked iteratively, so a
@@ -269,9 +271,8 @@ class _Parser:
             what = _REFUSED_NODES.get(type(func), "this kind of call")
             raise self.fail(f"only the grammar's functions may be called ({what})", node)
         if func.id not in FUNCTIONS:
-            raise self.fail(
-                f"{func.id!r} is not a function of the grammar (functions: "
-                + ", ".join(FUNCTIONS) + ")", node)
+            raise self.fail(f"{func.id!r} is not a function of the grammar", node,
+                            "functions: " + ", ".join(FUNCTIONS))
         if node.keywords:
             raise self.fail(f"keyword arguments not allowed in a call of {func.id}", node)
         function, arity = FUNCTIONS[func.id]
