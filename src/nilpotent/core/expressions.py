@@ -144,6 +144,7 @@ class _Parser:
         self.text = text
         self.names = names
         self.where = where
+        self.seen: set[sp.Basic] = set()
 
     # --- errors -----------------------------------------------------------
     def fail(self, problem: str, node: ast.AST | None = None, hint: str = "") -> ExpressionError:
@@ -305,7 +306,13 @@ class _Parser:
         sympy may move numbers around while evaluating (``exp(710.0 + x)`` becomes
         ``exp(710.0)*exp(x)``), so the whole result is inspected, not only its head.
         """
-        for part in sp.preorder_traversal(value):
+        stack = [value]
+        while stack:
+            part = stack.pop()
+            if part in self.seen:  # subtrees already checked (operands) are skipped
+                continue
+            self.seen.add(part)
+            stack.extend(part.args)
             if part in _UNDEFINED:
                 raise self.fail("undefined or infinite value", node)
             if part is sp.I:
