@@ -264,6 +264,7 @@ def test_format_python_numbers():
 @pytest.mark.parametrize(
     "expr",
     [sp.I, sp.oo, sp.zoo, sp.nan, sp.asin(x), sp.Abs(x), sp.Symbol("a b"), sp.Symbol("pi"),
+     sp.Symbol("lambda"), sp.Symbol("__x__"),
      sp.Float("inf")],
     ids=str,
 )

@@ -32,6 +32,7 @@ it is a finite real number.
 from __future__ import annotations
 
 import ast
+import keyword
 import math
 import operator
 import warnings
@@ -420,7 +421,9 @@ _PRINTER = _GrammarPrinter({"order": None})
 def _check_printable(expr: sp.Basic) -> None:
     for node in sp.preorder_traversal(expr):
         if isinstance(node, sp.Symbol):
-            if not node.name.isidentifier() or node.name in RESERVED_NAMES:
+            name = node.name
+            if (not name.isidentifier() or keyword.iskeyword(name) or name in RESERVED_NAMES
+                    or (name.startswith("__") and name.endswith("__"))):
                 raise ExpressionError(
                     f"cannot write {expr} in the expression grammar: symbol name {node.name!r}")
         elif isinstance(node, sp.Float):
