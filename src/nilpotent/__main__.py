@@ -1,0 +1,5 @@
+"""``python -m nilpotent`` runs the command line."""
+
+from nilpotent.cli import run
+
+run()
