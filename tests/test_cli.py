@@ -101,7 +101,7 @@ def test_bad_input_exit_2_with_json_error(run_cli, args, kind):
 
 
 def test_bad_input_without_json_has_no_traceback(run_cli):
-    status, out, err = run_cli("analyze", "unicycle", "--at", "theta=1+")
+    status, _out, err = run_cli("analyze", "unicycle", "--at", "theta=1+")
     assert status == 2
     assert "Traceback" not in err
     assert "theta" in err or "1+" in err
@@ -110,7 +110,7 @@ def test_bad_input_without_json_has_no_traceback(run_cli):
 def test_hostile_model_file_refused(run_cli, tmp_path):
     model = tmp_path / "evil.toml"
     model.write_text('coordinates = ["x"]\n[[fields]]\nx = "().__class__.__bases__"\n')
-    status, out, err = run_cli("analyze", str(model))
+    status, _out, err = run_cli("analyze", str(model))
     assert status == 2
     assert "evil.toml" in err
     assert "Traceback" not in err
