@@ -1,0 +1,634 @@
+r"""Privileged coordinates at a point, with the certificate of their orders.
+
+Coordinates $y$ centred at $p$ are *privileged* when the non-holonomic order
+of each $y_j$ at $p$ equals the weight $w_j$ (``MATH.md`` §3–4).  All methods
+start from the **linear adapted coordinates** $z = A(x - p)$, $A = B^{-1}$,
+where the columns of $B$ are the values $Y_1(p), \dots, Y_n(p)$ of the adapted
+frame of :func:`nilpotent.core.filtration.analyze`, and describe the
+coordinates by two polynomial maps: $y = \psi(z)$ (``forward``) and
+$z = \chi(y)$ (``inverse``); then $x = p + B\chi(y)$.
+
+Methods (registry :data:`METHODS`)
+    ``"linear"``
+        $y = z$.  Privileged when the step is $\le 2$, not in general: the
+        certificate decides, and asking for it where it fails raises
+        :class:`~nilpotent.errors.NotPrivilegedError` naming the coordinate,
+        its computed order and its weight.
+    ``"algebraic"``
+        Bellaïche's algorithm, any step: for $j = 1..n$,
+        $y_j = z_j - \sum_{k=2}^{w_j-1} h_k(z_1..z_{j-1})$ with
+        $h_k = \sum_{|\alpha|=k,\ w(\alpha)<w_j}
+        Y_1^{\alpha_1}\cdots Y_{j-1}^{\alpha_{j-1}}(z_j - \sum_{q<k} h_q)(p)\,z^\alpha/\alpha!$.
+        The derivatives are read off one Taylor expansion:
+        $\sum_\alpha Y^\alpha g(p)\,s^\alpha/\alpha! = g(E(s))$ where
+        $E(s) = \exp(s_{j-1}Y_{j-1})\circ\cdots\circ\exp(s_1 Y_1)(p)$ (the
+        operators act right to left, the flows are composed left to right), and
+        only the terms of weighted degree $\le w_j - 1$ of $E$ are ever
+        computed.  The change is triangular polynomial: its inverse is exact.
+    ``"exponential"``
+        Coordinates of the 2nd kind: $x = E(y) = \exp(y_nY_n)\circ\cdots\circ
+        \exp(y_1Y_1)(p)$, the flows expanded as weighted Taylor series and
+        truncated at weighted degree $r$ (the step), which is all the nilpotent
+        approximation and its certificate see.  The forward map $y(x)$ is the
+        series inverse, $y_j$ kept to ordinary degree $w_j + 1$ in $x - p$
+        (the dropped terms have order $> w_j + 1$).
+    ``"auto"``
+        The cheapest privileged one: ``linear`` when its certificate passes,
+        else ``algebraic``.
+
+Certificate
+    :attr:`PrivilegedCoordinates.orders` are *computed*.  From the weighted
+    Taylor jets of the fields in $y$: if no component $[X_i]_{y_j}$ has a term of
+    weighted degree $< w_j - 1$, every chain $X_{i_1}\cdots X_{i_s}y_j$ with
+    $s < w_j$ has positive weighted order and vanishes at $p$, so
+    $\mathrm{ord}_p(y_j) \ge w_j$; and a chain of length $w_j$ of the degree
+    $-1$ parts that is nonzero at $0$ (computed) gives $= w_j$.  Where the jets
+    show a lower term, the order is computed directly as the least $s$ with
+    some $X_{i_1}\cdots X_{i_s}y_j(p) \ne 0$ (ordinary Taylor jets of the fields
+    to degree $s - 1$).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import symengine as se
+import sympy as sp
+
+from nilpotent.core.brackets import word_field_symengine
+from nilpotent.core.filtration import Filtration, analyze
+from nilpotent.core.system import ControlSystem
+from nilpotent.core.taylor import (
+    Poly,
+    ZeroTest,
+    lie_derivative,
+    to_symengine,
+    weighted_degree,
+    weighted_jets,
+)
+from nilpotent.errors import NotBracketGeneratingError, NotPrivilegedError, OptionError
+
+__all__ = ["METHODS", "PrivilegedCoordinates", "coordinate_names", "privileged_coordinates"]
+
+
+@dataclass(frozen=True)
+class PrivilegedCoordinates:
+    r"""Privileged coordinates $y$ at a point $p$, with the computed orders.
+
+    Attributes
+    ----------
+    method:
+        ``"linear"``, ``"algebraic"`` or ``"exponential"``.
+    filtration:
+        The filtration at $p$ the coordinates are built from (weights, frame).
+    names:
+        The symbols $y_1..y_n$.
+    forward:
+        $y_j$ as functions (polynomials) of the model coordinates, $y(p) = 0$.
+        Written in powers of $x_k - p_k$.
+    inverse:
+        $x_k$ as functions (polynomials) of $y$.
+    inverse_exact:
+        Whether ``inverse`` is exactly the inverse map of ``forward``
+        (``linear``, ``algebraic``).
+    inverse_order:
+        For ``exponential``: the weighted degree at which the exponential map
+        $E(y)$ was truncated (``inverse`` is that truncation).
+    orders:
+        Computed $\mathrm{ord}_p(y_j)$ (equal to the weights: privileged).
+    forward_exact:
+        Whether ``forward`` is exact (false for ``exponential``, a truncated
+        series inverse).
+    forward_order:
+        For ``exponential``: $y_j$ is kept to ordinary degree $w_j +$
+        ``forward_order`` in $x - p$.
+    frame_matrix:
+        $B$, column $k$ is $Y_{k+1}(p)$ (so $\partial_{z_k}|_p = Y_{k+1}(p)$).
+    linear_part:
+        $A = B^{-1}$ ($z = A(x - p)$, the linear adapted coordinates).
+    """
+
+    method: str
+    filtration: Filtration
+    names: tuple[sp.Symbol, ...]
+    forward: tuple[sp.Expr, ...]
+    inverse: tuple[sp.Expr, ...]
+    inverse_exact: bool
+    inverse_order: int | None
+    orders: tuple[int, ...]
+    forward_exact: bool = True
+    forward_order: int | None = None
+    frame_matrix: sp.ImmutableMatrix = field(default=None, repr=False)  # type: ignore[assignment]
+    linear_part: sp.ImmutableMatrix = field(default=None, repr=False)  # type: ignore[assignment]
+    forward_poly: tuple[Poly, ...] = field(default=(), repr=False, compare=False)
+    """$y_j$ as :class:`Poly` in the linear adapted coordinates $z$."""
+    inverse_poly: tuple[Poly, ...] = field(default=(), repr=False, compare=False)
+    """$z_k$ as :class:`Poly` in $y$."""
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False, hash=False)
+
+    # --- views ------------------------------------------------------------------
+    @property
+    def system(self) -> ControlSystem:
+        return self.filtration.system
+
+    @property
+    def point(self) -> tuple[sp.Expr, ...]:
+        return self.filtration.point
+
+    @property
+    def weights(self) -> tuple[int, ...]:
+        return self.filtration.weights
+
+    @property
+    def n(self) -> int:
+        return len(self.names)
+
+    def jacobian(self) -> sp.ImmutableMatrix:
+        r"""$\partial y/\partial x$ as a matrix of functions of the model coordinates."""
+        return sp.ImmutableMatrix(sp.Matrix(self.forward).jacobian(self.system.coordinates))
+
+    def inverse_jacobian(self) -> sp.ImmutableMatrix:
+        r"""$\partial x/\partial y$ as a matrix of functions of $y$."""
+        return sp.ImmutableMatrix(sp.Matrix(self.inverse).jacobian(self.names))
+
+    def field_jets(self, extra: int = 1) -> tuple[tuple[Poly, ...], ...]:
+        r"""Weighted Taylor jets of the system's fields in these coordinates.
+
+        ``jets[i][j]`` is the $y_{j+1}$-component of $X_{i+1}$, exact up to
+        weighted degree $w_{j+1} - 1 +$ ``extra`` (cached).
+        """
+        key = ("field_jets", extra)
+        if key not in self._cache:
+            ctx = _Context.of(self.filtration)
+            degrees = [w - 1 + extra for w in self.weights]
+            self._cache[key] = _fields_in(
+                ctx, self.forward_poly, self.inverse_poly, self.weights, degrees
+            )
+        return self._cache[key]
+
+    def to_y(self, x: Sequence[object]) -> tuple[sp.Expr, ...]:
+        """Privileged coordinates of a point given in model coordinates."""
+        subs = dict(zip(self.system.coordinates, (sp.S(v) for v in x), strict=True))
+        return tuple(sp.expand(e.xreplace(subs)) for e in self.forward)
+
+    def to_x(self, y: Sequence[object]) -> tuple[sp.Expr, ...]:
+        """Model coordinates of a point given in these coordinates (through ``inverse``)."""
+        subs = dict(zip(self.names, (sp.S(v) for v in y), strict=True))
+        return tuple(sp.expand(e.xreplace(subs)) for e in self.inverse)
+
+    def __str__(self) -> str:
+        lines = [
+            f"{self.method} privileged coordinates of {self.system.name} at "
+            f"({', '.join(str(v) for v in self.point)}), weights {self.weights}, "
+            f"computed orders {self.orders}"
+        ]
+        for y, e in zip(self.names, self.forward, strict=True):
+            lines.append(f"  {y} = {e}")
+        tag = "" if self.inverse_exact else f"  (truncated at weighted degree {self.inverse_order})"
+        lines.append("inverse:" + tag)
+        for x, e in zip(self.system.coordinates, self.inverse, strict=True):
+            lines.append(f"  {x} = {e}")
+        return "\n".join(lines)
+
+
+# --- shared context ----------------------------------------------------------------
+
+
+class _Context:
+    """What every construction needs: frame matrices, fields in symengine, the zero test."""
+
+    def __init__(self, filtration: Filtration) -> None:
+        sys = filtration.system
+        self.filtration = filtration
+        self.sys = sys
+        self.n = sys.n
+        self.p = filtration.point
+        self.weights = filtration.weights
+        self.step = filtration.step
+        self.xsyms = tuple(se.Symbol(str(c)) for c in sys.coordinates)
+        self.fields = tuple(
+            tuple(se.expand(to_symengine(e)) for e in f) for f in sys.specialized_fields
+        )
+        n = self.n
+        B = sp.Matrix(n, n, lambda j, k: filtration.frame_values[k][j])
+        A = B.inv()
+        A = A.applyfunc(lambda e: sp.radsimp(e) if e.has(sp.Pow) else e)
+        self.B = sp.ImmutableMatrix(B)
+        self.A = sp.ImmutableMatrix(A)
+        self.Bse = [[to_symengine(B[j, k]) for k in range(n)] for j in range(n)]
+        self.Ase = [[to_symengine(A[j, k]) for k in range(n)] for j in range(n)]
+        self.zero = ZeroTest()
+
+    @staticmethod
+    def of(filtration: Filtration) -> _Context:
+        cache = filtration.system._cache.setdefault("privileged.contexts", {})
+        key = (filtration.point, filtration.frame)
+        if key not in cache:
+            cache[key] = _Context(filtration)
+        return cache[key]
+
+    def x_of(self, inverse_poly: Sequence[Poly]) -> list[Poly]:
+        """$x = p + B\\chi(y)$ as polynomials in $y$."""
+        n = self.n
+        out = []
+        for k in range(n):
+            acc = Poly.constant(n, to_symengine(self.p[k]))
+            for l in range(n):
+                b = self.Bse[k][l]
+                if b != 0:
+                    acc = acc + inverse_poly[l].scale(b)
+            out.append(acc)
+        return out
+
+    def apply_A(self, vec: Sequence[Poly]) -> list[Poly]:
+        n = self.n
+        out = []
+        for j in range(n):
+            acc = Poly(vec[0].nvars)
+            for k in range(n):
+                a = self.Ase[j][k]
+                if a != 0 and vec[k].terms:
+                    acc = acc + vec[k].scale(a)
+            out.append(acc)
+        return out
+
+
+def _identity(n: int) -> tuple[Poly, ...]:
+    return tuple(Poly.variable(n, k) for k in range(n))
+
+
+def _fields_in(
+    ctx: _Context,
+    forward_poly: Sequence[Poly],
+    inverse_poly: Sequence[Poly],
+    weights: Sequence[int],
+    degrees: Sequence[int],
+) -> tuple[tuple[Poly, ...], ...]:
+    r"""Jets of $[X_i]_y = (\partial y/\partial z)(\chi(y))\,A\,X_i(p + B\chi(y))$.
+
+    Component $j$ exact to weighted degree ``degrees[j]`` (in ``weights``).
+    """
+    n = ctx.n
+    D = max(degrees)
+    xargs = ctx.x_of(inverse_poly)
+    flat = [c for f in ctx.fields for c in f]
+    jets = weighted_jets(flat, ctx.xsyms, xargs, weights, D)
+    linear = all(
+        len(f.terms) == 1 and f.terms.get(tuple(int(i == j) for i in range(n))) == 1
+        for j, f in enumerate(forward_poly)
+    )
+    if not linear:
+        jac = [
+            [forward_poly[j].diff(l).compose(inverse_poly, weights, degrees[j]) for l in range(n)]
+            for j in range(n)
+        ]
+    out = []
+    for i in range(len(ctx.fields)):
+        xz = ctx.apply_A(jets[i * n : (i + 1) * n])
+        if linear:
+            comps = [xz[j].truncate(weights, degrees[j]) for j in range(n)]
+        else:
+            comps = []
+            for j in range(n):
+                acc = Poly(n)
+                for l in range(n):
+                    if jac[j][l].terms and xz[l].terms:
+                        acc = acc + jac[j][l].mul(xz[l], weights, degrees[j])
+                comps.append(acc)
+        out.append(tuple(comps))
+    return tuple(out)
+
+
+# --- orders ---------------------------------------------------------------------------
+
+
+def _low_terms(
+    jets: Sequence[Sequence[Poly]], weights: Sequence[int], zero: ZeroTest
+) -> dict[int, int]:
+    """For each coordinate j with a term of weighted degree < w_j − 1: that least degree."""
+    low: dict[int, int] = {}
+    for comps in jets:
+        for j, comp in enumerate(comps):
+            for mono, c in comp.terms.items():
+                d = weighted_degree(mono, weights)
+                if d < weights[j] - 1 and not zero(c):
+                    low[j] = min(low.get(j, d), d)
+    return low
+
+
+def _chain_order_homogeneous(hat: Sequence[Sequence[Poly]], j: int, w: int, zero: ZeroTest) -> bool:
+    """Whether some $\\hat X_{i_1}\\cdots\\hat X_{i_w} y_j$ is nonzero (a constant)."""
+    n = len(hat[0])
+    level: dict[frozenset, Poly] = {}
+    f = Poly.variable(n, j)
+    level[frozenset(f.terms.items())] = f
+    for _ in range(w):
+        nxt: dict[frozenset, Poly] = {}
+        for g in level.values():
+            for X in hat:
+                h = lie_derivative(X, g).drop_zeros(zero)
+                if h.terms:
+                    nxt.setdefault(frozenset(h.terms.items()), h)
+        level = nxt
+        if not level:
+            return False
+    return any(not zero(g.value_at_zero()) for g in level.values())
+
+
+def _chain_order(
+    ctx: _Context,
+    forward_poly: Sequence[Poly],
+    inverse_poly: Sequence[Poly],
+    f: Poly,
+    max_order: int,
+) -> int | None:
+    """Least $s \\le$ ``max_order`` with some $X_{i_1}\\cdots X_{i_s} f(p) \\ne 0$ (``None``: none).
+
+    ``f`` is a polynomial in $y$ with $f(p) = 0$; ordinary Taylor jets of the
+    fields in $y$ to degree ``max_order − 1``, chains truncated as they go.
+    """
+    n = ctx.n
+    ones = [1] * n
+    if max_order < 1:
+        return None
+    jets = _fields_in(ctx, forward_poly, inverse_poly, ones, [max_order - 1] * n)
+    level = {frozenset(f.truncate(ones, max_order).terms.items()): f.truncate(ones, max_order)}
+    for s in range(1, max_order + 1):
+        nxt: dict[frozenset, Poly] = {}
+        for g in level.values():
+            for X in jets:
+                h = lie_derivative(X, g, ones, max_order - s).drop_zeros(ctx.zero)
+                if h.terms:
+                    nxt.setdefault(frozenset(h.terms.items()), h)
+        if any(not ctx.zero(h.value_at_zero()) for h in nxt.values()):
+            return s
+        level = nxt
+        if not level:
+            return None
+    return None
+
+
+def _certified_orders(
+    ctx: _Context,
+    forward_poly: Sequence[Poly],
+    inverse_poly: Sequence[Poly],
+    *,
+    quick: bool = False,
+) -> tuple[tuple[int | float, ...] | None, tuple[tuple[Poly, ...], ...]]:
+    """Computed orders of the coordinates, and the field jets (to degree w_j) used.
+
+    With ``quick``, return ``None`` for the orders as soon as the jets show the
+    coordinates are not privileged (without computing the lower orders).
+    """
+    w = ctx.weights
+    jets = _fields_in(ctx, forward_poly, inverse_poly, w, list(w))
+    low = _low_terms(jets, w, ctx.zero)
+    if quick and low:
+        return None, jets
+    hat = [[c.homogeneous_part(w, w[j] - 1) for j, c in enumerate(comps)] for comps in jets]
+    orders: list[int | float] = []
+    for j, wj in enumerate(w):
+        if not low and _chain_order_homogeneous(hat, j, wj, ctx.zero):
+            orders.append(wj)
+            continue
+        s = _chain_order(ctx, forward_poly, inverse_poly, Poly.variable(ctx.n, j), wj)
+        if s is None:
+            s = _chain_order(ctx, forward_poly, inverse_poly, Poly.variable(ctx.n, j), ctx.step + 1)
+        orders.append(s if s is not None else float("inf"))
+    return tuple(orders), jets
+
+
+# --- the exponential map -----------------------------------------------------------
+
+
+def _integrate(poly: Poly, k: int) -> Poly:
+    terms = {}
+    for m, c in poly.terms.items():
+        mm = list(m)
+        mm[k] += 1
+        terms[tuple(mm)] = c / se.Integer(mm[k])
+    return Poly(poly.nvars, terms)
+
+
+def _exponential_map(ctx: _Context, degree: int) -> list[Poly]:
+    r"""$E(s) = \exp(s_nY_n)\circ\cdots\circ\exp(s_1Y_1)(p)$ in $x$, to weighted degree ``degree``.
+
+    Each flow by Picard iteration $x \leftarrow E_{l-1} + \int_0^{s_l} Y_l(x)$ on
+    weighted jets (the integral raises the weighted degree by $w_l$).
+    """
+    n, w = ctx.n, ctx.weights
+    key = ("exponential_map", degree)
+    cache = ctx.__dict__.setdefault("cache", {})
+    if key in cache:
+        return cache[key]
+    E = [Poly.constant(n, to_symengine(v)) for v in ctx.p]
+    for l, word in enumerate(ctx.filtration.frame):
+        wl = w[l]
+        if wl > degree:
+            continue
+        Y = word_field_symengine(ctx.sys, word)
+        base = E
+        cur = base
+        for _ in range(degree // wl + 2):
+            vals = weighted_jets(Y, ctx.xsyms, cur, w, degree - wl)
+            new = [b + _integrate(v, l) for b, v in zip(base, vals, strict=True)]
+            if all(a.terms == b.terms for a, b in zip(new, cur, strict=True)):
+                break
+            cur = new
+        E = cur
+    cache[key] = E
+    return E
+
+
+# --- the three constructions --------------------------------------------------------
+
+
+Built = tuple[tuple[Poly, ...], tuple[Poly, ...], bool, int | None, bool, int | None]
+"""(forward_poly, inverse_poly, inverse_exact, inverse_order, forward_exact, forward_order)."""
+
+
+def _linear(ctx: _Context) -> Built:
+    ident = _identity(ctx.n)
+    return ident, ident, True, None, True, None
+
+
+def _algebraic(ctx: _Context) -> Built:
+    n, w = ctx.n, ctx.weights
+    if max(w) <= 2:
+        return _linear(ctx)
+    E = _exponential_map(ctx, max(w) - 1)
+    zE = ctx.apply_A([e - Poly.constant(n, to_symengine(p)) for e, p in zip(E, ctx.p, strict=True)])
+    forward: list[Poly] = []
+    for j, wj in enumerate(w):
+        g = Poly.variable(n, j)
+        if wj >= 3:
+            args = [zE[l].restrict(j) for l in range(n)]
+            for k in range(2, wj):
+                G = g.compose(args, w, wj - 1)
+                h = Poly(
+                    n,
+                    {
+                        a: c
+                        for a, c in G.terms.items()
+                        if sum(a) == k and weighted_degree(a, w) < wj and not ctx.zero(c)
+                    },
+                )
+                g = g - h
+        forward.append(g)
+    inverse: list[Poly] = []
+    for j in range(n):
+        rest = Poly.variable(n, j) - forward[j]  # a polynomial in z_1..z_{j-1}
+        args = inverse + [Poly.variable(n, l) for l in range(j, n)]
+        inverse.append(Poly.variable(n, j) + rest.compose(args))
+    return tuple(forward), tuple(inverse), True, None, True, None
+
+
+def _exponential(ctx: _Context) -> Built:
+    n, w = ctx.n, ctx.weights
+    r = max(w)
+    E = _exponential_map(ctx, r)
+    zE = ctx.apply_A([e - Poly.constant(n, to_symengine(p)) for e, p in zip(E, ctx.p, strict=True)])
+    ones = [1] * n
+    top = r + 1
+    nonlinear = [zE[j] - Poly.variable(n, j) for j in range(n)]  # χ(y) − y
+    y = list(_identity(n))
+    for _ in range(top):
+        new = [
+            (Poly.variable(n, j) - nonlinear[j].compose(y, ones, top)).truncate(ones, top)
+            for j in range(n)
+        ]
+        if all(a.terms == b.terms for a, b in zip(new, y, strict=True)):
+            break
+        y = new
+    forward = tuple(y[j].truncate(ones, w[j] + 1) for j in range(n))
+    return forward, tuple(zE), False, r, False, 1
+
+
+METHODS: dict[str, Callable[[_Context], Built]] = {
+    "linear": _linear,
+    "algebraic": _algebraic,
+    "exponential": _exponential,
+}
+"""Registry: method name → builder of (forward, inverse) polynomial maps.  ``"auto"`` is
+accepted by :func:`privileged_coordinates` besides these."""
+
+
+def coordinate_names(sys: ControlSystem) -> tuple[sp.Symbol, ...]:
+    """Symbols ``y1..yn`` for the privileged coordinates (another letter if the model uses them)."""
+    taken = set(sys.coordinate_names) | {k for k, _ in sys.parameters}
+    for letter in ("y", "z", "w", "eta", "xi"):
+        names = tuple(sp.Symbol(f"{letter}{k}", real=True) for k in range(1, sys.n + 1))
+        if not taken & {str(s) for s in names}:
+            return names
+    return tuple(sp.Symbol(f"y_priv{k}", real=True) for k in range(1, sys.n + 1))
+
+
+def _to_sympy_in_x(ctx: _Context, polys: Sequence[Poly]) -> tuple[sp.Expr, ...]:
+    """Polynomials in $z$ written in the model coordinates, in powers of $x_k - p_k$."""
+    n = ctx.n
+    d = [Poly.variable(n, k) for k in range(n)]
+    lin = ctx.apply_A(d)  # z = A d, d = x − p
+    shifts = [c - p if p != 0 else c for c, p in zip(ctx.sys.coordinates, ctx.p, strict=True)]
+    return tuple(f.compose(lin).to_sympy(shifts) for f in polys)
+
+
+def privileged_coordinates(
+    sys: ControlSystem,
+    point: Sequence[object] | None = None,
+    method: str = "auto",
+    filtration: Filtration | None = None,
+) -> PrivilegedCoordinates:
+    r"""Privileged coordinates of ``sys`` at ``point``, with computed orders.
+
+    Parameters
+    ----------
+    sys:
+        The system (parameters substituted).
+    point:
+        $p$ (default: the origin; ignored when ``filtration`` is given).
+    method:
+        ``"auto"`` (default), or a name in :data:`METHODS`.
+    filtration:
+        A precomputed :func:`~nilpotent.core.filtration.analyze` result at $p$.
+
+    Returns
+    -------
+    PrivilegedCoordinates
+        With ``orders`` equal to the weights (computed, see the module docstring).
+
+    Raises
+    ------
+    NotPrivilegedError
+        ``method="linear"`` where linear adapted coordinates are not privileged
+        (the message names each coordinate whose computed order differs from its weight).
+    NotBracketGeneratingError
+        If the system is not bracket-generating at $p$.
+    OptionError
+        Unknown method.
+
+    Examples
+    --------
+    >>> x1, x2, x3 = sp.symbols("x1 x2 x3")
+    >>> martinet = ControlSystem("martinet", (x1, x2, x3), ((1, 0, x2**2 / 2), (0, 1, 0)))
+    >>> c = privileged_coordinates(martinet)
+    >>> c.method, c.orders
+    ('linear', (1, 1, 3))
+    """
+    if method != "auto" and method not in METHODS:
+        raise OptionError(
+            f"unknown privileged-coordinates method {method!r}; choose one of "
+            f"auto, {', '.join(METHODS)}"
+        )
+    f = filtration if filtration is not None else analyze(sys, point)
+    if not f.bracket_generating:
+        raise NotBracketGeneratingError(
+            f"{sys.name!r} is not bracket-generating at the point: its brackets span "
+            f"{f.growth_vector[-1]} of {sys.n} dimensions (growth vector {f.growth_vector}); "
+            "no privileged coordinates"
+        )
+    ctx = _Context.of(f)
+    if method == "auto":
+        built = _linear(ctx)
+        orders, jets = _certified_orders(ctx, built[0], built[1], quick=True)
+        name = "linear"
+        if orders is None or tuple(orders) != tuple(f.weights):
+            name = "algebraic"
+            built = _algebraic(ctx)
+            orders, jets = _certified_orders(ctx, built[0], built[1])
+    else:
+        name = method
+        built = METHODS[method](ctx)
+        orders, jets = _certified_orders(ctx, built[0], built[1])
+    bad = [(j, o, wj) for j, (o, wj) in enumerate(zip(orders, f.weights, strict=True)) if o != wj]
+    names = coordinate_names(sys)
+    if bad:
+        what = "; ".join(f"{names[j]} has order {o} but weight {wj}" for j, o, wj in bad)
+        hint = (
+            " (use method 'algebraic' or 'exponential', privileged at any step)"
+            if name == "linear"
+            else ""
+        )
+        raise NotPrivilegedError(
+            f"{name} coordinates of {sys.name!r} at the point are not privileged: {what}{hint}"
+        )
+    forward_poly, inverse_poly, inv_exact, inv_order, fwd_exact, fwd_order = built
+    x_of_y = ctx.x_of(inverse_poly)
+    coords = PrivilegedCoordinates(
+        method=name,
+        filtration=f,
+        names=names,
+        forward=_to_sympy_in_x(ctx, forward_poly),
+        inverse=tuple(e.to_sympy(names) for e in x_of_y),
+        inverse_exact=inv_exact,
+        inverse_order=inv_order,
+        orders=tuple(int(o) for o in orders),
+        forward_exact=fwd_exact,
+        forward_order=fwd_order,
+        frame_matrix=ctx.B,
+        linear_part=ctx.A,
+        forward_poly=tuple(forward_poly),
+        inverse_poly=tuple(inverse_poly),
+    )
+    coords._cache[("field_jets", 1)] = jets
+    return coords

@@ -1,0 +1,386 @@
+r"""Truncated polynomials with exact coefficients, and weighted Taylor jets at a point.
+
+This is the arithmetic under privileged coordinates and the nilpotent
+approximation (``MATH.md`` §4–5).  A :class:`Poly` is a sparse polynomial in
+``nvars`` variables whose coefficients are exact symengine numbers
+(``1/2``, ``sqrt(3)/2``, ``cos(1/5)``; floats only where the input has floats).
+
+Weighted degree
+    With weights $w = (w_1, \dots, w_n)$ the weighted degree of the monomial
+    $y^\alpha$ is $w(\alpha) = \sum_k w_k \alpha_k$; the ordinary degree is the
+    case $w = (1, \dots, 1)$.  "Truncated at degree $D$" means: every term of
+    weighted degree $> D$ is dropped, every term of degree $\le D$ is exact.
+
+Weighted Taylor jets (:func:`weighted_jets`)
+    The jet of an expression $f(x)$ along a polynomial map $x = \varphi(y)$
+    is computed by substituting $y_k \to t^{w_k} y_k$ and expanding in the
+    single variable $t$ up to $t^D$ with symengine's univariate ``series``:
+    the coefficient of $t^d$ is exactly the weighted-degree-$d$ part of
+    $f(\varphi(y))$.  Nothing of degree $> D$ is ever expanded.
+
+Zero tests
+    Coefficients are expanded and compared with 0 structurally.  Where a
+    coefficient mixes transcendental numbers (``cos(1/5)**2 + sin(1/5)**2 - 1``)
+    the structural test can miss a zero; :class:`ZeroTest` then decides from a
+    50-digit evaluation and counts such numeric decisions so that results can
+    say they were not decided exactly.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+
+import symengine as se
+import sympy as sp
+
+Monomial = tuple[int, ...]
+
+__all__ = [
+    "Monomial",
+    "Poly",
+    "ZeroTest",
+    "to_symengine",
+    "weighted_degree",
+    "weighted_jets",
+]
+
+
+def to_symengine(expr: object) -> se.Basic:
+    """Convert a sympy expression (or a number) to symengine."""
+    return se.S(expr)
+
+
+def weighted_degree(mono: Monomial, weights: Sequence[int]) -> int:
+    r"""The weighted degree $\sum_k w_k \alpha_k$ of the monomial $y^\alpha$."""
+    return sum(a * w for a, w in zip(mono, weights, strict=True) if a)
+
+
+def _clean(c: se.Basic) -> se.Basic:
+    if c.is_Number:
+        return c
+    return se.expand(c)
+
+
+class ZeroTest:
+    """Decide whether an exact coefficient is zero.
+
+    Structural first (symengine's canonical form after expansion); where that
+    leaves a non-number, the value at :attr:`digits` digits decides, and
+    :attr:`numeric_decisions` counts the coefficients so decided to be zero.
+    """
+
+    def __init__(self, digits: int = 50) -> None:
+        self.digits = digits
+        self.numeric_decisions = 0
+
+    def __call__(self, c: se.Basic) -> bool:
+        c = _clean(se.S(c))
+        if c == 0:
+            return True
+        if c.is_Number:
+            return False
+        value = sp.N(c._sympy_(), self.digits)
+        if not value.is_number:
+            return False
+        if abs(complex(value)) < 10 ** (-(self.digits - 10)):
+            self.numeric_decisions += 1
+            return True
+        return False
+
+
+class Poly:
+    r"""A sparse polynomial $\sum_\alpha c_\alpha y^\alpha$ with exact coefficients.
+
+    ``terms`` maps exponent tuples to nonzero symengine coefficients.  A
+    :class:`Poly` is never mutated after construction; every operation returns
+    a new one.  Operations that multiply accept ``weights`` and ``degree`` and
+    then drop the terms of weighted degree above ``degree`` (``degree=None``:
+    no truncation).
+    """
+
+    __slots__ = ("nvars", "terms")
+
+    def __init__(self, nvars: int, terms: Mapping[Monomial, se.Basic] | None = None) -> None:
+        self.nvars = nvars
+        clean: dict[Monomial, se.Basic] = {}
+        if terms:
+            for mono, c in terms.items():
+                c = _clean(c)
+                if c != 0:
+                    clean[mono] = c
+        self.terms = clean
+
+    # --- constructors -------------------------------------------------------
+    @classmethod
+    def constant(cls, nvars: int, c: object) -> Poly:
+        return cls(nvars, {(0,) * nvars: se.S(c)})
+
+    @classmethod
+    def variable(cls, nvars: int, k: int) -> Poly:
+        mono = [0] * nvars
+        mono[k] = 1
+        return cls(nvars, {tuple(mono): se.Integer(1)})
+
+    @classmethod
+    def from_expr(
+        cls, expr: se.Basic, variables: Sequence[se.Symbol], ignore: Iterable[se.Symbol] = ()
+    ) -> Poly:
+        """Read an expression polynomial in ``variables`` (exponents of ``ignore`` dropped)."""
+        n = len(variables)
+        index = {v: k for k, v in enumerate(variables)}
+        skip = set(ignore)
+        expr = se.expand(se.S(expr))
+        terms: dict[Monomial, se.Basic] = {}
+        if expr == 0:
+            return cls(n)
+        parts = expr.args if isinstance(expr, se.Add) else (expr,)
+        for term in parts:
+            exps = [0] * n
+            coeff: list[se.Basic] = []
+            factors = term.args if isinstance(term, se.Mul) else (term,)
+            for f in factors:
+                if f in skip:
+                    continue
+                if f in index:
+                    exps[index[f]] += 1
+                    continue
+                if isinstance(f, se.Pow):
+                    base, ex = f.args
+                    if base in skip:
+                        continue
+                    if base in index and ex.is_Integer and int(ex) > 0:
+                        exps[index[base]] += int(ex)
+                        continue
+                if f.free_symbols & set(index):
+                    raise ArithmeticError(f"not a polynomial in {list(variables)}: factor {f}")
+                coeff.append(f)
+            key = tuple(exps)
+            c = se.Mul(*coeff) if len(coeff) > 1 else (coeff[0] if coeff else se.Integer(1))
+            terms[key] = terms[key] + c if key in terms else c
+        return cls(n, terms)
+
+    # --- inspection ---------------------------------------------------------
+    def is_zero(self) -> bool:
+        return not self.terms
+
+    def __bool__(self) -> bool:
+        return bool(self.terms)
+
+    def __repr__(self) -> str:
+        return f"Poly({self.nvars}, {self.terms!r})"
+
+    def value_at_zero(self) -> se.Basic:
+        return self.terms.get((0,) * self.nvars, se.Integer(0))
+
+    def degrees(self, weights: Sequence[int]) -> set[int]:
+        """The set of weighted degrees of the terms."""
+        return {weighted_degree(m, weights) for m in self.terms}
+
+    def order(self, weights: Sequence[int], zero: ZeroTest | None = None) -> int | None:
+        """Least weighted degree of a nonzero term (``None`` for the zero polynomial)."""
+        degs = [
+            weighted_degree(m, weights)
+            for m, c in self.terms.items()
+            if zero is None or not zero(c)
+        ]
+        return min(degs) if degs else None
+
+    def homogeneous_part(self, weights: Sequence[int], d: int) -> Poly:
+        return Poly(
+            self.nvars, {m: c for m, c in self.terms.items() if weighted_degree(m, weights) == d}
+        )
+
+    def truncate(self, weights: Sequence[int], degree: int | None) -> Poly:
+        if degree is None:
+            return self
+        return Poly(
+            self.nvars,
+            {m: c for m, c in self.terms.items() if weighted_degree(m, weights) <= degree},
+        )
+
+    def drop_zeros(self, zero: ZeroTest) -> Poly:
+        return Poly(self.nvars, {m: c for m, c in self.terms.items() if not zero(c)})
+
+    # --- ring operations ----------------------------------------------------
+    def __add__(self, other: Poly) -> Poly:
+        terms = dict(self.terms)
+        for m, c in other.terms.items():
+            terms[m] = terms[m] + c if m in terms else c
+        return Poly(self.nvars, terms)
+
+    def __sub__(self, other: Poly) -> Poly:
+        terms = dict(self.terms)
+        for m, c in other.terms.items():
+            terms[m] = terms[m] - c if m in terms else -c
+        return Poly(self.nvars, terms)
+
+    def __neg__(self) -> Poly:
+        return Poly(self.nvars, {m: -c for m, c in self.terms.items()})
+
+    def scale(self, c: object) -> Poly:
+        c = se.S(c)
+        if c == 0:
+            return Poly(self.nvars)
+        return Poly(self.nvars, {m: c * v for m, v in self.terms.items()})
+
+    def mul(
+        self, other: Poly, weights: Sequence[int] | None = None, degree: int | None = None
+    ) -> Poly:
+        """The product, truncated at weighted ``degree`` when given."""
+        terms: dict[Monomial, se.Basic] = {}
+        if degree is not None:
+            assert weights is not None
+            da = {m: weighted_degree(m, weights) for m in self.terms}
+            db = {m: weighted_degree(m, weights) for m in other.terms}
+        for ma, ca in self.terms.items():
+            for mb, cb in other.terms.items():
+                if degree is not None and da[ma] + db[mb] > degree:
+                    continue
+                m = tuple(a + b for a, b in zip(ma, mb, strict=True))
+                v = ca * cb
+                terms[m] = terms[m] + v if m in terms else v
+        return Poly(self.nvars, terms)
+
+    def diff(self, k: int) -> Poly:
+        """The partial derivative with respect to variable ``k`` (0-based)."""
+        terms: dict[Monomial, se.Basic] = {}
+        for m, c in self.terms.items():
+            a = m[k]
+            if a:
+                mm = list(m)
+                mm[k] = a - 1
+                terms[tuple(mm)] = c * a
+        return Poly(self.nvars, terms)
+
+    def restrict(self, keep: int) -> Poly:
+        """Set the variables of index ``>= keep`` to 0."""
+        return Poly(self.nvars, {m: c for m, c in self.terms.items() if not any(m[keep:])})
+
+    def compose(
+        self,
+        args: Sequence[Poly],
+        weights: Sequence[int] | None = None,
+        degree: int | None = None,
+    ) -> Poly:
+        """Substitute ``args[k]`` for variable ``k``, truncating in the args' variables."""
+        if not args:
+            return self
+        nv = args[0].nvars
+        powers: list[list[Poly]] = [[Poly.constant(nv, 1)] for _ in args]
+        out = Poly(nv)
+        acc: dict[Monomial, se.Basic] = {}
+        for mono, c in self.terms.items():
+            term = Poly.constant(nv, c)
+            for k, a in enumerate(mono):
+                if not a:
+                    continue
+                pk = powers[k]
+                while len(pk) <= a:
+                    pk.append(pk[-1].mul(args[k], weights, degree))
+                term = term.mul(pk[a], weights, degree)
+                if not term.terms:
+                    break
+            for m, v in term.terms.items():
+                acc[m] = acc[m] + v if m in acc else v
+        out = Poly(nv, acc)
+        return out
+
+    # --- conversions ----------------------------------------------------------
+    def to_symengine(self, symbols: Sequence[se.Symbol]) -> se.Basic:
+        out = []
+        for m, c in self.terms.items():
+            f = [c]
+            for s, a in zip(symbols, m, strict=True):
+                if a:
+                    f.append(s**a if a > 1 else s)
+            out.append(se.Mul(*f))
+        return se.Add(*out) if out else se.Integer(0)
+
+    def to_sympy(self, symbols: Sequence[sp.Symbol]) -> sp.Expr:
+        out = []
+        for m, c in sorted(self.terms.items()):
+            f: list[sp.Expr] = [c._sympy_()]
+            for s, a in zip(symbols, m, strict=True):
+                if a:
+                    f.append(s**a)
+            out.append(sp.Mul(*f))
+        return sp.Add(*out)
+
+
+def lie_derivative(
+    field: Sequence[Poly], f: Poly, weights: Sequence[int] | None = None, degree: int | None = None
+) -> Poly:
+    r"""$Xf = \sum_k X_k\,\partial f/\partial y_k$ for polynomial ``field`` and ``f``."""
+    out = Poly(f.nvars)
+    for k, comp in enumerate(field):
+        if not comp.terms:
+            continue
+        d = f.diff(k)
+        if d.terms:
+            out = out + comp.mul(d, weights, degree)
+    return out
+
+
+def bracket(X: Sequence[Poly], Y: Sequence[Poly]) -> tuple[Poly, ...]:
+    r"""$[X, Y] = DY\cdot X - DX\cdot Y$ for polynomial fields (no truncation)."""
+    return tuple(lie_derivative(X, yj) - lie_derivative(Y, xj) for xj, yj in zip(X, Y, strict=True))
+
+
+def weighted_jets(
+    exprs: Sequence[se.Basic],
+    xsyms: Sequence[se.Symbol],
+    args: Sequence[Poly],
+    weights: Sequence[int],
+    degree: int,
+) -> list[Poly]:
+    r"""Weighted Taylor jets of ``exprs`` along the polynomial map $x = \varphi(y)$.
+
+    Parameters
+    ----------
+    exprs:
+        Expressions in ``xsyms`` (symengine).
+    xsyms:
+        The symbols $x_1..x_n$ of the expressions.
+    args:
+        ``args[k]`` is $x_k$ as a :class:`Poly` in $y$ (constant term: the point).
+    weights:
+        Weights of the $y$ variables.
+    degree:
+        Keep the terms of weighted degree ``<= degree``.
+
+    Returns
+    -------
+    list of Poly
+        The truncated jet of $f(\varphi(y))$ in $y$, one per expression, computed
+        by $y_k \to t^{w_k} y_k$ and a univariate series in $t$ to order ``degree``.
+
+    Examples
+    --------
+    >>> x = se.Symbol("x")
+    >>> [p] = weighted_jets([se.sin(x)], [x], [Poly.variable(1, 0)], [1], 3)
+    >>> sorted(p.terms.items())
+    [((1,), 1), ((3,), -1/6)]
+    """
+    nv = args[0].nvars if args else 0
+    t = se.Symbol("_nilpotent_t")
+    ys = [se.Symbol(f"_nilpotent_y{k}") for k in range(nv)]
+    tys = [t**w * y for w, y in zip(weights, ys, strict=True)]
+    sub = {x: a.to_symengine(tys) for x, a in zip(xsyms, args, strict=True)}
+    out: list[Poly] = []
+    for e in exprs:
+        e = se.S(e)
+        if e == 0:
+            out.append(Poly(nv))
+            continue
+        es = e.xreplace(sub) if sub else e
+        if not es.has(t):
+            out.append(Poly.from_expr(es, ys))
+            continue
+        pairs = se.series(es, t, n=degree + 1, as_deg_coef_pair=True)
+        acc = Poly(nv)
+        for deg, coef in pairs:
+            if int(deg) > degree:
+                continue
+            acc = acc + Poly.from_expr(coef, ys, ignore=(t,))
+        out.append(acc.truncate(weights, degree))
+    return out
