@@ -130,6 +130,29 @@ def _loop_inputs(
     return tuple(InputSignal(0.0, tuple(cos[i]), tuple(sin[i])) for i in range(m))
 
 
+def bracket_matrix(system: TriangularSystem) -> np.ndarray:
+    """Columns ``[X̂_a, X̂_b](0)`` for the pairs ``a < b`` (lexicographic), shape ``(n, pairs)``.
+
+    ``[X,Y] = DY·X − DX·Y``; only the terms of total degree ≤ 1 of the ``P_ij``
+    matter at 0.  For a step-2 system these brackets are constant fields.
+    """
+    n, m = system.n, system.m
+    const = np.zeros((m, n))
+    lin = np.zeros((m, n, n))  # lin[i, j, l] = coefficient of y_l in P_ij
+    for i in range(m):
+        for j in range(n):
+            for c, e in system.terms[i][j]:
+                deg = sum(e)
+                if deg == 0:
+                    const[i, j] += c
+                elif deg == 1:
+                    lin[i, j, e.index(1)] += c
+    cols = [
+        lin[b] @ const[a] - lin[a] @ const[b] for a in range(m) for b in range(a + 1, m)
+    ]
+    return np.array(cols).T.reshape(n, -1)
+
+
 def _loop_segment(
     system: TriangularSystem, y_from: np.ndarray, y_goal: np.ndarray
 ) -> Segment | None:
@@ -142,14 +165,7 @@ def _loop_segment(
         return None
     m = system.m
     pairs = [(a, b) for a in range(m) for b in range(a + 1, m)]
-    zero = np.zeros(system.n)
-    cols = []
-    for p in range(len(pairs)):
-        areas = [0.0] * len(pairs)
-        areas[p] = 1.0
-        seg = Segment(1.0, LOOP_OMEGA, _loop_inputs(m, pairs, areas, LOOP_OMEGA))
-        cols.append(endpoint(system, zero, [seg])[w2])
-    g = np.array(cols).T
+    g = bracket_matrix(system)[w2]
     areas, *_ = np.linalg.lstsq(g, residual, rcond=None)
     if np.max(np.abs(g @ areas - residual)) > 1e-10 * max(1.0, float(np.max(np.abs(residual)))):
         raise PlanningError(

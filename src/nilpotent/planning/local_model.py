@@ -1,0 +1,273 @@
+"""Local nilpotent models of a system at float points, for iterative steering.
+
+A :class:`LocalModel` bundles what one iteration of MATH.md §7 needs at a base
+point ``p``: the nilpotent approximation as a float
+:class:`~nilpotent.planning.triangular.TriangularSystem` in privileged
+coordinates ``y``, and the maps ``x ↦ y(x)`` and ``y ↦ x(y)``.
+
+Two builders (registry :data:`BUILDERS`):
+
+``"numeric"`` (step ≤ 2, e.g. the trident snake; fast)
+    Linear adapted coordinates, computed from float values only.  The frame
+    is ``Y_1..Y_{n_1}`` = the first fields ``X_i`` independent at ``p`` and
+    ``Y_{n_1+1}..Y_n`` = the first brackets ``[X_a,X_b]`` (``a < b``,
+    lexicographic: the length-2 Hall words) completing a basis, with
+    ``[X_a,X_b](p) = DX_b(p)X_a(p) − DX_a(p)X_b(p)``.  With ``F`` the matrix
+    of the frame at ``p`` and ``A = F⁻¹``: ``y = A(x − p)``, ``x = p + F y``
+    (privileged when the step is ≤ 2, MATH.md §4).  In these coordinates
+    ``X_i`` reads ``A X_i(p + F y)``; keeping the terms of weighted degree
+    ``w_j − 1`` gives ``X̂_i``: the constants ``(A X_i(p))_j`` for ``w_j = 1``,
+    and ``Σ_{w_l = 1} (A DX_i(p) F)_{jl} y_l`` for ``w_j = 2``.  Costs a few
+    evaluations of compiled fields and Jacobians (about 0.1 ms), so it can be
+    redone at every iterate.
+
+``"symbolic"`` (any step)
+    :func:`nilpotent.core.approximation.approximate` at the point (exact
+    symbolic work, cached per point), its fields converted to floats and its
+    coordinate maps compiled with ``lambdify``.
+
+Regularity is checked numerically: the growth vector at ``p`` (ranks of the
+fields and of fields plus brackets, relative singular-value tolerance
+:data:`RANK_TOL`) must equal the one at random points nearby; otherwise
+:class:`~nilpotent.errors.SingularPointError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import sympy as sp
+
+from nilpotent.core.system import ControlSystem
+from nilpotent.errors import NotBracketGeneratingError, PlanningError, SingularPointError
+from nilpotent.numeric.compile import CompiledSystem, compile_system
+from nilpotent.planning.triangular import TriangularSystem
+
+#: Relative tolerance on singular values deciding numerical ranks.
+RANK_TOL = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class LocalModel:
+    """The nilpotent approximation at a float point, ready for steering.
+
+    Attributes
+    ----------
+    point:
+        The base point ``p`` (model coordinates).
+    nilpotent:
+        ``X̂_i`` in privileged coordinates ``y`` (``y(p) = 0``).
+    forward:
+        ``x ↦ y(x)`` (float arrays ``(n,)``).
+    inverse:
+        ``y ↦ x(y)``.
+    growth_vector:
+        ``(n_1(p), …)`` as computed numerically (or by the symbolic approximation).
+    builder:
+        ``"numeric"`` or ``"symbolic"``.
+    """
+
+    point: tuple[float, ...]
+    nilpotent: TriangularSystem
+    forward: Callable[[np.ndarray], np.ndarray]
+    inverse: Callable[[np.ndarray], np.ndarray]
+    growth_vector: tuple[int, ...]
+    builder: str
+
+
+def _rank(mat: np.ndarray) -> int:
+    if mat.size == 0:
+        return 0
+    sv = np.linalg.svd(mat, compute_uv=False)
+    return int(np.sum(sv > RANK_TOL * max(sv[0], 1e-300)))
+
+
+def _values(compiled: CompiledSystem, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    fields = compiled.field_values(p)[0]  # (n, m)
+    jac = compiled.jacobian(p)[0]  # (m, n, n)
+    m = fields.shape[1]
+    brackets = [
+        jac[b] @ fields[:, a] - jac[a] @ fields[:, b] for a in range(m) for b in range(a + 1, m)
+    ]
+    return fields, np.array(brackets).T.reshape(fields.shape[0], -1)
+
+
+def numeric_growth(compiled: CompiledSystem, p: np.ndarray) -> tuple[int, int]:
+    """``(n_1(p), n_2(p))``: ranks of the fields and of the fields with their brackets."""
+    fields, brackets = _values(compiled, p)
+    return _rank(fields), _rank(np.hstack([fields, brackets]))
+
+
+@lru_cache(maxsize=64)
+def _compiled(system: ControlSystem) -> CompiledSystem:
+    return compile_system(system)
+
+
+def compiled_system(system: ControlSystem) -> CompiledSystem:
+    """The compiled fields of ``system`` (parameters substituted; memoised)."""
+    return _compiled(system)
+
+
+def generic_growth(compiled: CompiledSystem, p: np.ndarray, seed: int = 0) -> tuple[int, int]:
+    """The largest ``(n_1, n_2)`` at three random points within 0.1 of ``p`` (generic values)."""
+    rng = np.random.default_rng(seed)
+    best = (0, 0)
+    for _ in range(3):
+        q = p + 0.1 * rng.standard_normal(p.shape)
+        g = numeric_growth(compiled, q)
+        best = max(best, g)
+    return best
+
+
+def check_regular(system: ControlSystem, point: Sequence[float], what: str) -> tuple[int, int]:
+    """Raise :class:`SingularPointError` if ``point`` is singular for the first two steps.
+
+    Returns ``(n_1, n_2)`` at the point.
+    """
+    compiled = compiled_system(system)
+    p = np.asarray(point, dtype=float)
+    here = numeric_growth(compiled, p)
+    generic = generic_growth(compiled, p)
+    if here != generic:
+        raise SingularPointError(
+            f"the {what} {_fmt(p)} is a singular point of {system.name}: dimensions of the "
+            f"fields and first brackets there are {here}, nearby {generic}; steering needs "
+            "regular start, goal and path"
+        )
+    return here
+
+
+def _fmt(p: np.ndarray) -> str:
+    return "(" + ", ".join(f"{v:.6g}" for v in p) + ")"
+
+
+def numeric_model(system: ControlSystem, point: Sequence[float]) -> LocalModel:
+    """The step-2 nilpotent approximation at ``point`` in linear adapted coordinates (floats).
+
+    Raises
+    ------
+    SingularPointError
+        The growth vector at the point differs from the generic one nearby.
+    PlanningError
+        The step at the point is more than 2 (use the ``"symbolic"`` builder).
+    """
+    compiled = compiled_system(system)
+    p = np.asarray(point, dtype=float)
+    n = p.size
+    fields, brackets = _values(compiled, p)
+    n1 = _rank(fields)
+    n2 = _rank(np.hstack([fields, brackets]))
+    if n2 < n:
+        if generic_growth(compiled, p)[1] == n:
+            raise SingularPointError(
+                f"{_fmt(p)} is a singular point of {system.name}: fields and first brackets "
+                f"span {n2} of {n} dimensions there, {n} nearby"
+            )
+        raise PlanningError(
+            f"{system.name} has step > 2 at {_fmt(p)} (fields and first brackets span {n2} of "
+            f"{n}): the numeric builder needs step <= 2, use the symbolic one"
+        )
+    if (n1, n2) != generic_growth(compiled, p):
+        raise SingularPointError(
+            f"{_fmt(p)} is a singular point of {system.name}: growth ({n1}, {n2}) there, "
+            f"{generic_growth(compiled, p)} nearby"
+        )
+    frame: list[np.ndarray] = []
+    for col in [*fields.T, *brackets.T]:
+        if len(frame) == n:
+            break
+        if _rank(np.array([*frame, col]).T) == len(frame) + 1:
+            frame.append(col)
+    f = np.array(frame).T
+    a = np.linalg.inv(f)
+    weights = tuple([1] * n1 + [2] * (n - n1))
+    names = tuple(f"y{j + 1}" for j in range(n))
+    jac = compiled.jacobian(p)[0]
+    ax = a @ fields  # (n, m)
+    terms = []
+    for i in range(fields.shape[1]):
+        lin = a @ jac[i] @ f  # (n, n): ∂(A X_i(p + F y))_j / ∂y_l at 0
+        row = []
+        for j in range(n):
+            if weights[j] == 1:
+                row.append(((float(ax[j, i]), (0,) * n),) if ax[j, i] != 0 else ())
+            else:
+                row.append(
+                    tuple(
+                        (float(lin[j, l_]), tuple(int(k == l_) for k in range(n)))
+                        for l_ in range(n1)
+                        if lin[j, l_] != 0
+                    )
+                )
+        terms.append(tuple(row))
+    tri = TriangularSystem(names, weights, tuple(terms))
+
+    def forward(x: np.ndarray) -> np.ndarray:
+        return a @ (np.asarray(x, dtype=float) - p)
+
+    def inverse(y: np.ndarray) -> np.ndarray:
+        return p + f @ np.asarray(y, dtype=float)
+
+    growth = (n1, n) if n1 < n else (n1,)
+    return LocalModel(tuple(p), tri, forward, inverse, growth, "numeric")
+
+
+def symbolic_model(system: ControlSystem, point: Sequence[float]) -> LocalModel:
+    """The nilpotent approximation of :func:`nilpotent.core.approximation.approximate` at ``point``.
+
+    The point is passed as sympy floats; the result is converted to a
+    :class:`TriangularSystem` and lambdified coordinate maps.
+    """
+    try:
+        from nilpotent.core.approximation import approximate
+    except ImportError as exc:  # the core layer is always installed with the package
+        raise PlanningError(f"symbolic approximation unavailable: {exc}") from None
+    p = tuple(sp.Float(float(v), 17) for v in point)
+    approx = approximate(system, p)
+    filt = approx.filtration
+    if not getattr(filt, "bracket_generating", True):
+        raise NotBracketGeneratingError(
+            f"{system.name} is not bracket generating at {_fmt(np.asarray(point, float))}"
+        )
+    if not getattr(filt, "regular", True):
+        raise SingularPointError(
+            f"{_fmt(np.asarray(point, float))} is a singular point of {system.name} "
+            f"(growth {tuple(filt.growth_vector)}, generic {tuple(filt.generic_growth_vector)})"
+        )
+    names = tuple(approx.coordinates.names)
+    tri = TriangularSystem.from_fields(approx.fields, names, tuple(filt.weights))
+    params = {sp.Symbol(k): v for k, v in system.parameters}
+    fwd_exprs = [sp.S(e).xreplace(params) for e in approx.coordinates.forward]
+    inv_exprs = [sp.S(e).xreplace(params) for e in approx.coordinates.inverse]
+    fwd = sp.lambdify([system.coordinates], fwd_exprs, "numpy")
+    inv = sp.lambdify([names], inv_exprs, "numpy")
+
+    def forward(x: np.ndarray) -> np.ndarray:
+        return np.asarray(fwd(np.asarray(x, dtype=float)), dtype=float).reshape(-1)
+
+    def inverse(y: np.ndarray) -> np.ndarray:
+        return np.asarray(inv(np.asarray(y, dtype=float)), dtype=float).reshape(-1)
+
+    return LocalModel(
+        tuple(float(v) for v in point), tri, forward, inverse,
+        tuple(filt.growth_vector), "symbolic",
+    )
+
+
+#: Local-model builders by name.
+BUILDERS: dict[str, Callable[[ControlSystem, Sequence[float]], LocalModel]] = {
+    "numeric": numeric_model,
+    "symbolic": symbolic_model,
+}
+
+
+def choose_builder(system: ControlSystem, point: Sequence[float]) -> str:
+    """``"numeric"`` where fields and first brackets span the space at ``point``.
+
+    Else ``"symbolic"``.
+    """
+    _, n2 = numeric_growth(compiled_system(system), np.asarray(point, dtype=float))
+    return "numeric" if n2 == system.n else "symbolic"

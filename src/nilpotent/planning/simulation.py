@@ -1,0 +1,106 @@
+"""Simulation of the true system under plan controls (through :mod:`nilpotent.numeric`).
+
+Segments (:class:`~nilpotent.planning.controls.Segment`) are converted to the
+numeric layer's :class:`~nilpotent.numeric.inputs.HarmonicInputs` (the same
+format: constant plus ``cos``/``sin`` harmonics, time restarting in every
+segment) and integrated with adaptive DOP853 at tight tolerances.  Several
+candidate controls from the same state are integrated as one batch.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+
+import numpy as np
+
+from nilpotent.core.system import ControlSystem
+from nilpotent.errors import IntegrationError
+from nilpotent.numeric.compile import numba_available
+from nilpotent.numeric.inputs import HarmonicInputs
+from nilpotent.numeric.integrators import integrate
+from nilpotent.planning.controls import Segment
+from nilpotent.planning.local_model import compiled_system
+
+#: Tolerances of the true-system integration (DOP853).
+RTOL = 1e-12
+ATOL = 1e-13
+
+
+def harmonic_inputs(batch: Sequence[Sequence[Segment]]) -> HarmonicInputs:
+    """Pack several control sequences (same number of segments) into ``HarmonicInputs``."""
+    b = len(batch)
+    s = len(batch[0])
+    m = batch[0][0].m
+    k = max((i.harmonics for segs in batch for seg in segs for i in seg.inputs), default=0)
+    durations = np.zeros((b, s))
+    omegas = np.zeros((b, s))
+    constant = np.zeros((b, s, m))
+    cos = np.zeros((b, s, m, k))
+    sin = np.zeros((b, s, m, k))
+    for bi, segs in enumerate(batch):
+        for si, seg in enumerate(segs):
+            durations[bi, si] = seg.duration
+            omegas[bi, si] = seg.omega
+            for i, sig in enumerate(seg.inputs):
+                constant[bi, si, i] = sig.constant
+                cos[bi, si, i, : len(sig.cos)] = sig.cos
+                sin[bi, si, i, : len(sig.sin)] = sig.sin
+    return HarmonicInputs(durations, omegas, constant, cos, sin)
+
+
+def _engine() -> str:
+    return "numba" if numba_available() else "scipy"
+
+
+def simulate_candidates(
+    system: ControlSystem, x0: Sequence[float], candidates: Sequence[Sequence[Segment]]
+) -> np.ndarray:
+    """End states ``(len(candidates), n)`` of the true system from ``x0``; NaN where it failed."""
+    compiled = compiled_system(system)
+    by_len: dict[int, list[int]] = {}
+    for idx, segs in enumerate(candidates):
+        by_len.setdefault(len(segs), []).append(idx)
+    out = np.full((len(candidates), system.n), np.nan)
+    x = np.asarray(x0, dtype=float)
+    for length, idxs in by_len.items():
+        if length == 0:
+            out[idxs] = x
+            continue
+        inputs = harmonic_inputs([candidates[i] for i in idxs])
+        sol = integrate(
+            compiled, np.repeat(x[None, :], len(idxs), axis=0), inputs,
+            engine=_engine(), rtol=RTOL, atol=ATOL,
+        )
+        final = np.array(sol.final)
+        final[~sol.ok] = np.nan
+        out[idxs] = final
+    return out
+
+
+def simulate_path(
+    system: ControlSystem,
+    x0: Sequence[float],
+    segments: Sequence[Segment],
+    points_per_segment: int = 40,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(times, states)`` of the true system under ``segments``, sampled in every segment."""
+    if not segments:
+        x = np.asarray(x0, dtype=float)
+        return np.zeros(1), x[None, :]
+    starts = np.concatenate([[0.0], np.cumsum([s.duration for s in segments])])
+    times = np.unique(
+        np.concatenate(
+            [np.linspace(a, b, points_per_segment + 1) for a, b in itertools.pairwise(starts)]
+        )
+    )
+    times = times[times <= starts[-1]]
+    sol = integrate(
+        compiled_system(system), np.asarray(x0, dtype=float), harmonic_inputs([segments]),
+        engine=_engine(), rtol=RTOL, atol=ATOL, times=times,
+    )
+    if not sol.all_ok:
+        raise IntegrationError(
+            f"simulating the plan of {system.name} failed (status {int(sol.status[0])})"
+        )
+    return np.array(sol.times), np.array(sol.samples[0])
