@@ -1,0 +1,30 @@
+"""Numbers from symbols: the numeric compiler and the batched integrators.
+
+* :func:`compile_fields` / :func:`compile_system` → :class:`CompiledSystem`
+  (vectorised fields, right-hand side, Jacobians; numpy, numba or JAX);
+* :class:`HarmonicInputs`, :func:`bracket_inputs`: inputs as coefficient arrays;
+* :func:`integrate` → :class:`BatchSolution` (adaptive or fixed-step DOP853,
+  numba-parallel over the batch, with ``solve_ivp`` as the reference engine).
+"""
+
+from nilpotent.numeric.compile import BACKENDS as BACKENDS
+from nilpotent.numeric.compile import CompiledSystem as CompiledSystem
+from nilpotent.numeric.compile import compile_fields as compile_fields
+from nilpotent.numeric.compile import compile_system as compile_system
+from nilpotent.numeric.inputs import HarmonicInputs as HarmonicInputs
+from nilpotent.numeric.inputs import bracket_inputs as bracket_inputs
+from nilpotent.numeric.integrators import ENGINES as ENGINES
+from nilpotent.numeric.integrators import METHODS as METHODS
+from nilpotent.numeric.integrators import BatchSolution as BatchSolution
+from nilpotent.numeric.integrators import Status as Status
+from nilpotent.numeric.integrators import integrate as integrate
+from nilpotent.numeric.integrators import solve_function_input as solve_function_input
+from nilpotent.numeric.tableaux import DOP853 as DOP853
+from nilpotent.numeric.tableaux import TABLEAUX as TABLEAUX
+from nilpotent.numeric.tableaux import ButcherTableau as ButcherTableau
+
+__all__ = [
+    "BACKENDS", "DOP853", "ENGINES", "METHODS", "TABLEAUX", "BatchSolution", "ButcherTableau",
+    "CompiledSystem", "HarmonicInputs", "Status", "bracket_inputs", "compile_fields",
+    "compile_system", "integrate", "solve_function_input",
+]
