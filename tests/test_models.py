@@ -263,3 +263,19 @@ def test_one_trailer_fields_by_hand_and_chained_form():
         assert vanishes(lie(f, z4) - z3 * lie(f, z1), sys.coordinates)
     jac = sp.Matrix([[lie(f, z) for f in sys.specialized_fields] for z in (z1, z2)])
     assert sp.simplify(jac.det().subs({x: 0, y: 0, t0: 0, t1: 0})) != 0
+
+
+CROSS_CHECK = {
+    **GROWTH_AT_ORIGIN,
+    "trident-snake": (3, 6),
+    "trident-snake-paper": (3, 6),
+    "trident-snake-joints": (3, 6),
+}
+
+
+@pytest.mark.parametrize("spec", sorted(CROSS_CHECK))
+def test_core_filtration_agrees_with_the_hand_derived_growth(spec):
+    filtration = pytest.importorskip("nilpotent.core.filtration")
+    result = filtration.analyze(get_model(spec))
+    assert result.growth_vector == CROSS_CHECK[spec]
+    assert result.regular == (spec != "martinet")

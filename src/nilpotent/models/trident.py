@@ -776,7 +776,7 @@ def joint_singularity(
             "along the legs with the joints locked violates no constraint",
         )
     point, *_ = np.linalg.lstsq(normals, lines[:, 2], rcond=None)
-    px, py = float(point[0]), float(point[1])
+    px, py = (round(float(v), 12) + 0.0 for v in point)  # + 0.0 turns -0.0 into 0.0
     return JointSingularity(
         det,
         True,
