@@ -279,3 +279,17 @@ def test_core_filtration_agrees_with_the_hand_derived_growth(spec):
     result = filtration.analyze(get_model(spec))
     assert result.growth_vector == CROSS_CHECK[spec]
     assert result.regular == (spec != "martinet")
+
+
+@pytest.mark.parametrize(
+    ("spec", "params"),
+    [
+        ("trident-snake", {"l": 0}),
+        ("trident-snake-joints", {"r": -1}),
+        ("car-trailers:2", {"d2": 0}),
+    ],
+)
+def test_lengths_must_be_positive(spec, params):
+    with pytest.raises(ModelError) as err:
+        get_model(spec, params)
+    assert "positive" in str(err.value) and next(iter(params)) in str(err.value)

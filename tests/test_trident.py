@@ -295,3 +295,23 @@ def test_joint_determinant_matches_the_matrix_at_random_points():
     psi = qs[:, 2:3] + np.array([float(a) for a in BODY_LEG_ANGLES]) + qs[:, 3:]
     m = np.stack([-np.sin(psi), np.cos(psi), r * np.cos(qs[:, 3:]) + l], axis=-1)
     assert np.allclose(joint_determinant(qs, TridentGeometry(r, l)), np.linalg.det(m), atol=1e-12)
+
+
+def test_constraint_residuals_agree_with_the_derivation():
+    """Body and joint forms: identically 0; paper form: the closed forms of the docs."""
+    from nilpotent.models.trident import constraint_residuals
+
+    body = constraint_residuals(get_model("trident-snake", {"r": R_TEST, "l": L_TEST}))
+    assert all(sp.expand(sp.expand_trig(e).rewrite(sp.exp)) == 0 for row in body for e in row)
+    paper = get_model("trident-snake-paper")
+    res = constraint_residuals(paper)
+    x3 = paper.coordinates[2]
+    for i, (c, phi) in enumerate(zip(PAPER_LEG_ANGLES, paper.coordinates[3:], strict=True)):
+        beta = c + phi
+        assert sp.simplify(res[0][i] - (sp.sin(beta) - sp.sin(x3 + beta))) == 0
+        assert sp.simplify(res[1][i] - (sp.cos(x3 + beta) - sp.cos(beta))) == 0
+        assert res[2][i] == 0
+    joints = get_model("trident-snake-joints", {"r": R_TEST, "l": L_TEST})
+    val = numeric(constraint_residuals(joints), joints.coordinates)
+    for q in random_configs(10):
+        assert np.allclose(val(q), 0.0, atol=1e-12)

@@ -33,9 +33,30 @@ from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
 from nilpotent.models.trailers import car_trailers
-from nilpotent.models.trident import trident_snake, trident_snake_joints, trident_snake_paper
+from nilpotent.models.trident import (
+    TridentGeometry,
+    WheelSlip,
+    joint_singularity,
+    paper_singularity,
+    trident_snake,
+    trident_snake_joints,
+    trident_snake_paper,
+    wheel_slip,
+)
 
-__all__ = ["MAX_TRAILERS", "MODELS", "ModelInfo", "get_model", "list_models", "load_system"]
+__all__ = [
+    "MAX_TRAILERS",
+    "MODELS",
+    "ModelInfo",
+    "TridentGeometry",
+    "WheelSlip",
+    "get_model",
+    "joint_singularity",
+    "list_models",
+    "load_system",
+    "paper_singularity",
+    "wheel_slip",
+]
 
 #: Largest ``K`` accepted in ``car-trailers:K`` (the symbolic work grows quickly with K).
 MAX_TRAILERS = 50
@@ -69,6 +90,9 @@ class ModelInfo:
         The argument used by :attr:`example_spec`.
     parameter_note:
         Human-readable parameter rule for families (``"d1..dK = 1"``).
+    positive_parameters:
+        Every parameter must be a positive number (lengths); :func:`get_model`
+        refuses other values with :class:`ModelError`.
     """
 
     name: str
@@ -78,6 +102,7 @@ class ModelInfo:
     argument: str | None = None
     default_argument: int | None = None
     parameter_note: str = ""
+    positive_parameters: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "parameters", MappingProxyType(dict(self.parameters)))
@@ -107,6 +132,7 @@ def _entry(
     default_argument: int | None = None,
     parameter_note: str = "",
     description: str = "",
+    positive_parameters: bool = False,
 ) -> ModelInfo:
     system = build(default_argument) if argument else build()
     return ModelInfo(
@@ -117,6 +143,7 @@ def _entry(
         argument=argument,
         default_argument=default_argument,
         parameter_note=parameter_note,
+        positive_parameters=positive_parameters,
     )
 
 
@@ -125,9 +152,9 @@ MODELS: Mapping[str, ModelInfo] = MappingProxyType(
     {
         info.name: info
         for info in (
-            _entry("trident-snake", trident_snake),
+            _entry("trident-snake", trident_snake, positive_parameters=True),
             _entry("trident-snake-paper", trident_snake_paper),
-            _entry("trident-snake-joints", trident_snake_joints),
+            _entry("trident-snake-joints", trident_snake_joints, positive_parameters=True),
             _entry("unicycle", unicycle),
             _entry(
                 "car-trailers",
@@ -137,6 +164,7 @@ MODELS: Mapping[str, ModelInfo] = MappingProxyType(
                 parameter_note="d1..dK=1 (hitch lengths, one per trailer)",
                 description="unicycle car pulling K trailers hitched at the axle centres; "
                 "growth (2,3,...,K+3) at the origin",
+                positive_parameters=True,
             ),
             _entry("heisenberg", heisenberg),
             _entry("engel", engel),
@@ -189,7 +217,9 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
     ------
     ModelError
         Unknown name (the message lists the known ones), a bad or missing
-        argument, or an unknown parameter name.
+        argument, an unknown parameter name, or a length parameter that is
+        not a positive number (``trident-snake``: ``r``, ``l``;
+        ``car-trailers``: ``d1..dK``).
     """
     name, sep, arg = spec.partition(":")
     info = MODELS.get(name.strip())
@@ -207,6 +237,12 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
         system = info.build(_parse_argument(spec, info, arg))
     if params:
         system = system.with_parameters(dict(params))
+    if info.positive_parameters:
+        for key, value in system.parameters:
+            if not (value.is_number and value.is_extended_real and value.is_positive):
+                raise ModelError(
+                    f"model {spec!r}: parameter {key} must be a positive number, got {value}"
+                )
     return system
 
 

@@ -72,6 +72,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 import sympy as sp
 
 from nilpotent.core.system import ControlSystem
@@ -81,8 +82,10 @@ __all__ = [
     "BODY_LEG_ANGLES",
     "FORMS",
     "PAPER_LEG_ANGLES",
+    "Configs",
     "JointSingularity",
     "PaperSingularity",
+    "Trajectory",
     "TridentGeometry",
     "WheelSlip",
     "constraint_residuals",
@@ -107,6 +110,11 @@ FORMS: tuple[str, ...] = ("trident-snake", "trident-snake-paper", "trident-snake
 
 _ONE = sp.Integer(1)
 _ZERO = sp.Integer(0)
+
+#: Configurations ``(x, y, θ, φ1, φ2, φ3)``: array-like of shape ``(..., 6)``.
+Configs = npt.ArrayLike
+#: A trajectory: array-like of shape ``(T, 6)``; its times: shape ``(T,)``.
+Trajectory = npt.ArrayLike
 
 
 def _symbols() -> tuple[tuple[sp.Symbol, ...], sp.Symbol, sp.Symbol]:
@@ -406,7 +414,7 @@ _FLOAT_OFFSETS = {
 }
 
 
-def _configs(q: object) -> np.ndarray:
+def _configs(q: Configs) -> np.ndarray:
     arr = np.asarray(q, dtype=float)
     if arr.ndim == 0 or arr.shape[-1] != 6:
         raise OptionError(
@@ -479,42 +487,42 @@ class TridentGeometry:
         return cls.for_form(form, float(values.get("r", 1)), float(values.get("l", 1)))
 
     # --- positions -----------------------------------------------------------------
-    def body_centre(self, q: object) -> np.ndarray:
+    def body_centre(self, q: Configs) -> np.ndarray:
         """Centre of the body (the circumcentre), shape ``(..., 2)``."""
         return _configs(q)[..., 0:2].copy()
 
-    def vertex_angles(self, q: object) -> np.ndarray:
+    def vertex_angles(self, q: Configs) -> np.ndarray:
         """World polar angles ``θ + α_i`` of the three vertices, shape ``(..., 3)``."""
         qq = _configs(q)
         return qq[..., 2:3] + np.asarray(self.offsets)
 
-    def vertices(self, q: object) -> np.ndarray:
+    def vertices(self, q: Configs) -> np.ndarray:
         """The triangle's vertices (where the legs are jointed), shape ``(..., 3, 2)``."""
         qq = _configs(q)
         ang = self.vertex_angles(qq)
         return qq[..., None, 0:2] + self.r * np.stack([np.cos(ang), np.sin(ang)], axis=-1)
 
-    def leg_headings(self, q: object) -> np.ndarray:
+    def leg_headings(self, q: Configs) -> np.ndarray:
         """World headings ``ψ_i = θ + α_i + φ_i`` of the legs (and wheels), shape ``(..., 3)``."""
         qq = _configs(q)
         return self.vertex_angles(qq) + qq[..., 3:6]
 
-    def leg_directions(self, q: object) -> np.ndarray:
+    def leg_directions(self, q: Configs) -> np.ndarray:
         """Unit vectors ``(cos ψ_i, sin ψ_i)`` (the wheels' rolling direction), ``(..., 3, 2)``."""
         psi = self.leg_headings(q)
         return np.stack([np.cos(psi), np.sin(psi)], axis=-1)
 
-    def lateral_directions(self, q: object) -> np.ndarray:
+    def lateral_directions(self, q: Configs) -> np.ndarray:
         """Unit vectors ``n_i = (−sin ψ_i, cos ψ_i)`` (along the axles), ``(..., 3, 2)``."""
         psi = self.leg_headings(q)
         return np.stack([-np.sin(psi), np.cos(psi)], axis=-1)
 
-    def wheels(self, q: object) -> np.ndarray:
+    def wheels(self, q: Configs) -> np.ndarray:
         """Wheel positions (the legs' free ends) ``W_i``, shape ``(..., 3, 2)``."""
         return self.vertices(q) + self.l * self.leg_directions(q)
 
     # --- velocities ----------------------------------------------------------------
-    def wheel_velocities(self, q: object, qdot: object) -> np.ndarray:
+    def wheel_velocities(self, q: Configs, qdot: Configs) -> np.ndarray:
         """``Ẇ_i`` for configuration velocities ``q̇`` (same shape as ``q``), ``(..., 3, 2)``.
 
         ``Ẇ_i = (ẋ, ẏ) + r θ̇ J u(θ+α_i) + l (θ̇ + φ̇_i) J u(ψ_i)``, ``J`` the
@@ -531,11 +539,11 @@ class TridentGeometry:
         )
         return qd[..., None, 0:2] + vert + leg
 
-    def lateral_velocities(self, q: object, qdot: object) -> np.ndarray:
+    def lateral_velocities(self, q: Configs, qdot: Configs) -> np.ndarray:
         """Sideways speed ``n_i · Ẇ_i`` of each wheel (0 = no slip), shape ``(..., 3)``."""
         return np.sum(self.wheel_velocities(q, qdot) * self.lateral_directions(q), axis=-1)
 
-    def constraint_matrix(self, q: object) -> np.ndarray:
+    def constraint_matrix(self, q: Configs) -> np.ndarray:
         """Rows of constraints (C_i): ``A(q) q̇ = 0`` with ``A`` of shape ``(..., 3, 6)``.
 
         Row ``i`` is ``(−sin ψ_i, cos ψ_i, r cos φ_i + l, l δ_{i1}, l δ_{i2}, l δ_{i3})``;
@@ -551,7 +559,7 @@ class TridentGeometry:
             out[..., i, 3 + i] = self.l
         return out
 
-    def axle_lines(self, q: object) -> np.ndarray:
+    def axle_lines(self, q: Configs) -> np.ndarray:
         """Coefficients ``(a, b, c)`` of each axle line ``a X + b Y = c``, shape ``(..., 3, 3)``.
 
         The axle of wheel ``i`` is the line through ``W_i`` perpendicular to
@@ -604,11 +612,11 @@ class WheelSlip:
 
 def wheel_slip(
     geometry: TridentGeometry,
-    trajectory: object,
-    times: object,
+    trajectory: Trajectory,
+    times: npt.ArrayLike,
     coords_form: str | None = None,
     *,
-    velocities: object | None = None,
+    velocities: Trajectory | None = None,
 ) -> WheelSlip:
     r"""Lateral (sideways) velocity of each wheel along a trajectory, and its integral.
 
@@ -635,7 +643,9 @@ def wheel_slip(
     velocities:
         Optional ``q̇`` at each sample (shape ``(T, 6)``), e.g. the fields of
         the system that produced the trajectory times its inputs; otherwise
-        ``q̇`` is estimated by second-order finite differences of the samples.
+        ``q̇`` is estimated by second-order finite differences of the samples
+        (after unwrapping the angles ``θ, φ_i``, which may be given modulo 2π;
+        the samples must be dense enough that no angle moves by π between two).
 
     Returns
     -------
@@ -663,7 +673,10 @@ def wheel_slip(
     if not np.all(np.diff(t) > 0):
         raise OptionError("wheel_slip needs strictly increasing times")
     if velocities is None:
-        qdot = np.gradient(traj, t, axis=0, edge_order=2)
+        # angles live on the circle: unwrap them so that a jump by 2π is not a velocity
+        continuous = traj.copy()
+        continuous[:, 2:6] = np.unwrap(traj[:, 2:6], axis=0)
+        qdot = np.gradient(continuous, t, axis=0, edge_order=2)
         source = "finite-difference"
     else:
         qdot = _configs(velocities)
@@ -688,7 +701,7 @@ def wheel_slip(
 # --------------------------------------------------------------------------------------
 
 
-def joint_determinant(q: object, geometry: TridentGeometry | None = None) -> np.ndarray:
+def joint_determinant(q: Configs, geometry: TridentGeometry | None = None) -> np.ndarray:
     r"""$D = \det M(q)$ of the joint-velocity form, shape ``q.shape[:-1]``.
 
     $D = \sum_{(i,j,k)\ \mathrm{cyclic}} (r\cos\varphi_i + l)\sin(\psi_k - \psi_j)$
@@ -733,7 +746,7 @@ class JointSingularity:
 
 
 def joint_singularity(
-    q: object, geometry: TridentGeometry | None = None, *, tol: float = 1e-9
+    q: Configs, geometry: TridentGeometry | None = None, *, tol: float = 1e-9
 ) -> JointSingularity:
     """Detect and describe a singularity of the joint-velocity form at one configuration.
 
@@ -787,7 +800,7 @@ def joint_singularity(
     )
 
 
-def paper_singular_determinant(q: object) -> np.ndarray:
+def paper_singular_determinant(q: Configs) -> np.ndarray:
     """:func:`paper_singular_locus` evaluated numerically, shape ``q.shape[:-1]``.
 
     ``q`` holds the paper form's ``x1..x6``; only ``x4..x6`` enter.
@@ -824,7 +837,7 @@ class PaperSingularity:
     description: str
 
 
-def paper_singularity(q: object, *, tol: float = 1e-9) -> PaperSingularity:
+def paper_singularity(q: Configs, *, tol: float = 1e-9) -> PaperSingularity:
     """Detect and describe where the paper's eq. (vf) fields and brackets lose rank.
 
     Examples
