@@ -293,3 +293,13 @@ def test_lengths_must_be_positive(spec, params):
     with pytest.raises(ModelError) as err:
         get_model(spec, params)
     assert "positive" in str(err.value) and next(iter(params)) in str(err.value)
+
+
+def test_every_model_and_parameter_is_documented():
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "models.md").read_text()
+    for info in list_models():
+        assert f"`{info.usage}`" in text
+        for name in info.parameters:
+            assert name in text
