@@ -21,11 +21,13 @@ def models_command(json_out: JsonOpt = False) -> None:
                 "schema": "nilpotent/models@1",
                 "models": [
                     {
-                        "name": info.name,
+                        "name": info.usage,
+                        "example": info.example_spec,
                         "description": info.description,
                         "parameters": {
                             k: format_expression(v) for k, v in info.parameters.items()
                         },
+                        "parameter_rule": info.parameter_summary(),
                     }
                     for info in infos
                 ],
@@ -37,6 +39,5 @@ def models_command(json_out: JsonOpt = False) -> None:
     table.add_column("parameters (default)")
     table.add_column("description")
     for info in infos:
-        params = ", ".join(f"{k}={format_expression(v)}" for k, v in info.parameters.items())
-        table.add_row(info.name, params or "-", info.description)
+        table.add_row(info.usage, info.parameter_summary() or "-", info.description)
     stdout_console().print(table)
