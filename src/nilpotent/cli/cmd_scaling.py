@@ -1,0 +1,108 @@
+"""``nilpotent scaling``: how the approximation error scales with the loop amplitude."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+from nilpotent.cli.app import (
+    AtOpt,
+    JsonOpt,
+    ModelArg,
+    ParamOpt,
+    app,
+    cli_errors,
+    emit_json,
+    load_model_option,
+    parse_float_list,
+    parse_int_pair,
+    parse_point_option,
+    stdout_console,
+)
+from nilpotent.cli.cmd_simulate import (
+    BracketOpt,
+    OmegaOpt,
+    PeriodsOpt,
+    PlotOpt,
+    check_periods,
+    check_plot_path,
+    check_positive,
+    save_figure,
+)
+from nilpotent.errors import OptionError
+
+
+def print_scaling(study) -> None:
+    from rich.table import Table
+
+    console = stdout_console()
+    i, j = study.bracket
+    console.print(
+        f"[bold]{study.system.name}[/bold]: bracket motion [X{i},X{j}], ω = {study.omega:g}, "
+        f"{study.periods} period(s); errors max over time of |y − ŷ| in privileged coordinates"
+    )
+    table = Table()
+    table.add_column("amplitude")
+    for w in study.errors:
+        table.add_column(f"weight {w}")
+    for k, a in enumerate(study.amplitudes):
+        table.add_row(f"{a:g}", *[f"{study.errors[w][k]:.3e}" for w in study.errors])
+    console.print(table)
+    for w, slope in study.slopes.items():
+        shown = "n/a (errors at the noise floor: exact in this group)" if slope is None else (
+            f"{slope:.3f}"
+        )
+        console.print(
+            f"weight {w}: fitted log–log slope {shown}; expected {study.expected_slopes[w]}"
+        )
+
+
+@app.command("scaling")
+@cli_errors
+def scaling_command(
+    model: ModelArg,
+    bracket: BracketOpt,
+    amplitudes: Annotated[
+        str | None,
+        typer.Option(
+            "--amplitudes",
+            metavar="A1,A2,...",
+            help="Amplitudes (> 0, at least two different; default 0.01,0.02,0.04,0.08,0.16).",
+        ),
+    ] = None,
+    omega: OmegaOpt = 1.0,
+    periods: PeriodsOpt = 1,
+    at: AtOpt = None,
+    param: ParamOpt = None,
+    plot: PlotOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Fit the log–log slope of the approximation error per weight group (expected w + 1)."""
+    from nilpotent.simulate import DEFAULT_AMPLITUDES, scaling_study
+
+    amps = (
+        list(DEFAULT_AMPLITUDES)
+        if amplitudes is None
+        else parse_float_list(amplitudes, "--amplitudes")
+    )
+    for a in amps:
+        check_positive(a, "--amplitudes")
+    if len(set(amps)) < 2:
+        raise OptionError("--amplitudes: give at least two different amplitudes")
+    check_positive(omega, "--omega")
+    check_periods(periods)
+    check_plot_path(plot)
+    system = load_model_option(model, param)
+    pair = parse_int_pair(bracket, "--bracket", system.m)
+    point = parse_point_option(at, system)
+    study = scaling_study(system, pair, amps, omega=omega, periods=periods, point=point)
+    if plot is not None:
+        fig, _ = study.plot()
+        save_figure(fig, plot)
+    if json_out:
+        emit_json(study.to_json())
+        return
+    print_scaling(study)
+    if plot is not None:
+        stdout_console().print(f"figure written to {plot}")

@@ -1,0 +1,144 @@
+"""``nilpotent simulate``: a bracket motion of the system and of its nilpotent approximation."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from nilpotent.cli.app import (
+    AtOpt,
+    JsonOpt,
+    ModelArg,
+    ParamOpt,
+    app,
+    cli_errors,
+    emit_json,
+    load_model_option,
+    parse_int_pair,
+    parse_point_option,
+    stdout_console,
+    write_atomically,
+)
+from nilpotent.errors import OptionError
+
+BracketOpt = Annotated[
+    str,
+    typer.Option(
+        "--bracket",
+        metavar="I,J",
+        help="The two fields whose bracket the loop realises (1-based, different).",
+    ),
+]
+OmegaOpt = Annotated[
+    float, typer.Option("--omega", metavar="W", help="Angular frequency ω of the loop (> 0).")
+]
+PeriodsOpt = Annotated[
+    int, typer.Option("--periods", metavar="K", help="Number of whole periods (>= 1).")
+]
+PlotOpt = Annotated[
+    Path | None,
+    typer.Option("--plot", metavar="FILE", help="Write a figure (.png, .pdf, .svg, ...)."),
+]
+
+
+def check_plot_path(path: Path | None) -> None:
+    """Refuse a ``--plot`` file whose suffix matplotlib cannot write."""
+    if path is None:
+        return
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    kinds = FigureCanvasBase.get_supported_filetypes()
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix not in kinds:
+        raise OptionError(
+            f"--plot {path}: unknown image type {suffix!r} (use one of {', '.join(sorted(kinds))})"
+        )
+
+
+def save_figure(fig: Any, path: Path) -> None:
+    """Write ``fig`` to ``path`` whole or not at all."""
+    with write_atomically(path) as tmp:
+        fig.savefig(tmp, format=path.suffix.lower().lstrip("."), dpi=120)
+
+
+def check_positive(value: float, option: str) -> float:
+    if not (math.isfinite(value) and value > 0):
+        raise OptionError(f"{option} must be a positive number, got {value}")
+    return float(value)
+
+
+def check_periods(value: int) -> int:
+    if value < 1:
+        raise OptionError(f"--periods must be >= 1, got {value}")
+    return int(value)
+
+
+def print_comparison(comp) -> None:
+    from rich.table import Table
+
+    console = stdout_console()
+    i, j = comp.bracket
+    console.print(
+        f"[bold]{comp.system.name}[/bold]: bracket motion [X{i},X{j}], A = {comp.amplitude:g}, "
+        f"ω = {comp.omega:g}, {comp.periods} period(s); approximation in "
+        f"{comp.approximation.coordinates.method} privileged coordinates"
+    )
+    table = Table(title="end points (model coordinates)")
+    for col in ("coordinate", "weight", "original", "approximation", "prediction p+KπA²[Xi,Xj](p)"):
+        table.add_column(col)
+    for k, name in enumerate(comp.system.coordinate_names):
+        table.add_row(
+            name,
+            str(comp.weights[k]),
+            f"{comp.final_original[k]: .10g}",
+            f"{comp.final_approximation[k]: .10g}",
+            f"{comp.prediction[k]: .10g}",
+        )
+    console.print(table)
+    console.print(f"end-point difference: {comp.endpoint_error:.3e}")
+    console.print(f"largest difference along the way: {comp.max_error:.3e}")
+    for w, e in comp.errors_by_weight.items():
+        console.print(f"  weight {w} (privileged coordinates, max over time): {e:.3e}")
+    console.print(f"integration tolerance: {comp.tolerance:.1e}")
+
+
+@app.command("simulate")
+@cli_errors
+def simulate_command(
+    model: ModelArg,
+    bracket: BracketOpt,
+    amplitude: Annotated[
+        float, typer.Option("--amplitude", metavar="A", help="Loop amplitude A (> 0).")
+    ],
+    omega: OmegaOpt = 1.0,
+    periods: PeriodsOpt = 1,
+    at: AtOpt = None,
+    param: ParamOpt = None,
+    plot: PlotOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Simulate u_I = -Aω sin ωt, u_J = Aω cos ωt on the system and its nilpotent approximation."""
+    from nilpotent.simulate import compare_bracket_motion
+
+    check_positive(amplitude, "--amplitude")
+    check_positive(omega, "--omega")
+    check_periods(periods)
+    check_plot_path(plot)
+    system = load_model_option(model, param)
+    pair = parse_int_pair(bracket, "--bracket", system.m)
+    point = parse_point_option(at, system)
+    comp = compare_bracket_motion(
+        system, pair, amplitude, omega=omega, periods=periods, point=point
+    )
+    if plot is not None:
+        fig, _ = comp.plot()
+        save_figure(fig, plot)
+    if json_out:
+        emit_json(comp.to_json())
+        return
+    print_comparison(comp)
+    if plot is not None:
+        stdout_console().print(f"figure written to {plot}")
