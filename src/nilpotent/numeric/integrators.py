@@ -233,7 +233,8 @@ def integrate(
         final, samples, info = _run_numba(system, xs, sig, ts, method == "adaptive", int(steps),
                                           **common)
     else:
-        final, samples, info = _run_numpy(system, xs, sig, ts, int(steps), **common)
+        with np.errstate(over="ignore", invalid="ignore"):  # stopped trajectories
+            final, samples, info = _run_numpy(system, xs, sig, ts, int(steps), **common)
     status = info[:, 0].astype(np.int64)
     if chosen == "numba" and method == "adaptive":
         err = info[:, 3].copy()
@@ -245,7 +246,8 @@ def integrate(
             if chosen == "numba":
                 f2, s2, _ = _run_numba(system, xs, sig, ts, False, half, **common)
             else:
-                f2, s2, _ = _run_numpy(system, xs, sig, ts, half, **common)
+                with np.errstate(over="ignore", invalid="ignore"):
+                    f2, s2, _ = _run_numpy(system, xs, sig, ts, half, **common)
             diff = np.abs(final - f2).max(axis=1)
             if ts.size:
                 diff = np.maximum(diff, np.nan_to_num(np.abs(samples - s2), nan=np.inf).max(
@@ -484,7 +486,8 @@ def solve_function_input(
         except _TooManySteps:
             status = Status.MAX_STEPS
             break
-        got = sol.y.T
+        y = np.asarray(sol.y, dtype=float)
+        got = y.T if y.ndim == 2 else np.zeros((0, system.n))  # empty when stopped early
         if inside.size:
             pos = np.searchsorted(teval, inside)
             keep = pos < got.shape[0]
