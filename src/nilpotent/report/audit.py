@@ -42,7 +42,7 @@ from nilpotent.core.expressions import format_expression
 from nilpotent.core.system import ControlSystem
 from nilpotent.report.paper import OMEGA, A, PaperContent, PrintedField, T, X, Y, read_paper
 
-__all__ = ["AUDIT_SCHEMA", "Audit", "AuditEntry", "run_audit"]
+__all__ = ["AUDIT_SCHEMA", "Audit", "AuditEntry", "format_field", "run_audit"]
 
 #: The schema name written into ``audit.json``.
 AUDIT_SCHEMA = "nilpotent/audit@1"
@@ -152,7 +152,7 @@ def _fmt(value: sp.Expr) -> str:
     return format_expression(sp.S(value))
 
 
-def _fmt_field(comps: Sequence[sp.Expr], coords: Sequence[sp.Symbol]) -> str:
+def format_field(comps: Sequence[sp.Expr], coords: Sequence[sp.Symbol]) -> str:
     """``sqrt(3)*∂x5 - sqrt(3)*∂x6``: a field in the expression grammar with ∂ names."""
     terms = []
     for c, x in zip(comps, coords, strict=True):
@@ -420,8 +420,8 @@ def _check_section4_fields(paper: PaperContent, c: _Computed) -> Iterable[AuditE
             printed.section,
             f"Solving the no-slip (Pfaff) constraints for q̇ with body-velocity inputs gives "
             f"g{k + 1} as printed (coordinates x, y, θ, φ1, φ2, φ3 = x1..x6).",
-            _fmt_field(g, X),
-            _fmt_field(model, X),
+            format_field(g, X),
+            format_field(model, X),
             ok,
             why,
         )
@@ -467,8 +467,8 @@ def _check_vf(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
             printed.section,
             f"eq. vf: g{k + 1} is the Section 4 field with the rotation R_θ removed "
             "(ẇ = v, φ̇ = A(φ)v with the same A(φ)).",
-            _fmt_field(printed.components, X),
-            _fmt_field(removed, X),
+            format_field(printed.components, X),
+            format_field(removed, X),
             ok,
             why,
         )
@@ -515,18 +515,18 @@ def _check_liebrackets(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry
         if ok:
             why = f"[g{i},g{j}](0) computed from eq. vf"
         else:
-            why = f"[g{i},g{j}](0) from eq. vf is {_fmt_field(ours, X)}"
+            why = f"[g{i},g{j}](0) from eq. vf is {format_field(ours, X)}"
             if _same(printed.components[3:], body[3:]):
                 why += (
                     "; the printed value is the φ-part of Section 4's bracket "
-                    f"{_fmt_field(body, X)}"
+                    f"{format_field(body, X)}"
                 )
         yield _entry(
             f"sec4-bracket-g{k}",
             printed.section,
             f"eq. liebrackets: g{k} = [g{i},g{j}] at 0, computed from eq. vf.",
-            _fmt_field(printed.components, X),
-            _fmt_field(ours, X),
+            format_field(printed.components, X),
+            format_field(ours, X),
             ok,
             why,
         )
@@ -593,7 +593,7 @@ def _check_motion_claims(paper: PaperContent, c: _Computed) -> Iterable[AuditEnt
             "4",
             statement + ".",
             claim.text,
-            f"[g{i},g{j}](0) = {_fmt_field(b, X)} (Section 4 robot)",
+            f"[g{i},g{j}](0) = {format_field(b, X)} (Section 4 robot)",
             ok,
             why,
         )
@@ -736,20 +736,20 @@ def _check_approximation(paper: PaperContent, c: _Computed) -> Iterable[AuditEnt
         else:
             why = (
                 f"the weighted truncation of g{k + 1} in the paper's y = M x is "
-                f"{_fmt_field(trunc, Y)}"
+                f"{format_field(trunc, Y)}"
             )
         if any(not _vanishes(v) for v in low):
             why += (
                 f"; g{k + 1} also has terms of lower weighted degree in y "
-                f"({_fmt_field(low, Y)}), so y is not privileged"
+                f"({format_field(low, Y)}), so y is not privileged"
             )
         yield _entry(
             f"sec6-approx-g{k + 1}",
             printed.section,
             f"ĝ{k + 1} (Section 6) is the nilpotent approximation of g{k + 1} at 0 in the "
             "coordinates y = M x of Section 5.",
-            _fmt_field(printed.components, Y),
-            _fmt_field(trunc, Y),
+            format_field(printed.components, Y),
+            format_field(trunc, Y),
             ok,
             why,
         )
@@ -793,10 +793,11 @@ def _check_approximation(paper: PaperContent, c: _Computed) -> Iterable[AuditEnt
         "6",
         "(ĝ1, ĝ2, ĝ3) is a first-order (nilpotent) approximation of (g1, g2, g3) at 0.",
         "; ".join(
-            f"ĝ{k + 1} = {_fmt_field(f.components, Y)}" for k, f in enumerate(paper.approximation_y)
+            f"ĝ{k + 1} = {format_field(f.components, Y)}"
+            for k, f in enumerate(paper.approximation_y)
         ),
         "approximate(): "
-        + "; ".join(f"X̂{k + 1} = {_fmt_field(f, names)}" for k, f in enumerate(ours_y)),
+        + "; ".join(f"X̂{k + 1} = {format_field(f, names)}" for k, f in enumerate(ours_y)),
         ok,
         (
             "the printed fields equal approximate()'s (linear adapted coordinates) after a "
@@ -825,7 +826,7 @@ def _check_step(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
         f"printed ĝ: brackets of length 2 {'nonzero' if nonzero2 else 'zero'}, of length 3 "
         f"{'zero' if zero3 else 'nonzero'} → step {step}; approximate(): step {cert}",
         step == paper.step_claim and cert == paper.step_claim,
-        f"e.g. [ĝ1,ĝ2] = {_fmt_field(length2[0], Y)} ≠ 0; the step is the filtration's "
+        f"e.g. [ĝ1,ĝ2] = {format_field(length2[0], Y)} ≠ 0; the step is the filtration's "
         f"r = {len(paper.growth_claim)}"
         if step != paper.step_claim
         else "computed",
@@ -849,15 +850,16 @@ def _check_hat_brackets(paper: PaperContent, c: _Computed) -> Iterable[AuditEntr
         if not ok and other:
             a, b = paper.bracket_labels_sec7[other[0]]
             why = (
-                f"[ĝ{i},ĝ{j}] = {_fmt_field(ours, Y)}; the printed value is [ĝ{a},ĝ{b}], "
+                f"[ĝ{i},ĝ{j}] = {format_field(ours, Y)}; the printed value is [ĝ{a},ĝ{b}], "
                 "Section 7's naming"
             )
         yield _entry(
             f"sec6-bracket-g{k}",
             printed.section,
-            f"ĝ{k} = [ĝ{i},ĝ{j}] (Section 4's naming) equals {_fmt_field(printed.components, Y)}.",
-            _fmt_field(printed.components, Y),
-            _fmt_field(ours, Y),
+            f"ĝ{k} = [ĝ{i},ĝ{j}] (Section 4's naming) equals "
+            f"{format_field(printed.components, Y)}.",
+            format_field(printed.components, Y),
+            format_field(ours, Y),
             ok,
             why,
         )
@@ -917,19 +919,19 @@ def _check_approximation_x(paper: PaperContent, c: _Computed) -> Iterable[AuditE
         elif ours_ok:
             why = (
                 f"equals {what} (approximate()), but not the pushforward of Section 6's "
-                f"{name} by the paper's M⁻¹ ({_fmt_field(own[k], X)})"
+                f"{name} by the paper's M⁻¹ ({format_field(own[k], X)})"
             )
         else:
             why = (
                 f"neither the pushforward of Section 6's {name} by M⁻¹ "
-                f"({_fmt_field(own[k], X)}) nor {what} ({_fmt_field(ours_x[k], X)})"
+                f"({format_field(own[k], X)}) nor {what} ({format_field(ours_x[k], X)})"
             )
         yield _entry(
             f"sec7-approx-x-g{k + 1}",
             printed.section,
             f"{name} written in the coordinates x1..x6 (Section 7).",
-            _fmt_field(printed.components, X),
-            _fmt_field(ours_x[k], X),
+            format_field(printed.components, X),
+            format_field(ours_x[k], X),
             ok,
             why,
         )
@@ -947,8 +949,8 @@ def _check_motions_coincide(paper: PaperContent, c: _Computed) -> Iterable[Audit
         s4_name = next(kk for kk, p in paper.bracket_labels_sec4.items() if p == (i, j))
         if not _same(printed_hat[k], printed_orig[s4_name]):
             mismatched.append(
-                f"ĝ{k} = [ĝ{i},ĝ{j}] is printed {_fmt_field(printed_hat[k], X)} "
-                f"but g{s4_name} = [g{i},g{j}] is {_fmt_field(printed_orig[s4_name], X)}"
+                f"ĝ{k} = [ĝ{i},ĝ{j}] is printed {format_field(printed_hat[k], X)} "
+                f"but g{s4_name} = [g{i},g{j}] is {format_field(printed_orig[s4_name], X)}"
             )
     yield _entry(
         "sec7-motions-coincide-printed",
@@ -975,7 +977,7 @@ def _check_motions_coincide(paper: PaperContent, c: _Computed) -> Iterable[Audit
         orig = c.bracket_at_origin(c.vf, i, j)
         same = _same(list(hat_x), orig)
         ok = ok and same
-        rows.append(f"[X̂{i},X̂{j}](0) = {_fmt_field([sp.simplify(v) for v in hat_x], X)}")
+        rows.append(f"[X̂{i},X̂{j}](0) = {format_field([sp.simplify(v) for v in hat_x], X)}")
     yield _entry(
         "sec7-motions-coincide",
         paper.brackets_coincide_text.section,
