@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -34,12 +34,12 @@ import numpy as np
 
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NilpotentError, PlanningError, SingularPointError
-from nilpotent.planning.controls import Segment
+from nilpotent.planning.controls import Segment, reverse_segments
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
 from nilpotent.planning.simulation import simulate_candidates, simulate_path
 
-ANCHORS = ("current", "goal")
+ANCHORS = ("current", "goal", "start")
 #: Dilation factors tried, in order, when the full nilpotent step does not reduce the error.
 DAMPING = (1.0, 0.5, 0.25, 0.125, 0.0625)
 
@@ -60,6 +60,9 @@ class Iteration:
         How exactly the nilpotent system reached its target (``∞``-norm in ``y``).
     seconds:
         Wall-clock time of the iteration.
+    distance:
+        Homogeneous distance estimate to the goal after the iteration,
+        ``max_j |z_j|^{1/w_j}`` in privileged coordinates ``z`` at the goal.
     """
 
     error: float
@@ -67,6 +70,7 @@ class Iteration:
     segments: int
     nilpotent_error: float
     seconds: float
+    distance: float = math.nan
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,6 +159,7 @@ class Plan:
                     "segments": it.segments,
                     "nilpotent_error": it.nilpotent_error,
                     "seconds": it.seconds,
+                    "distance": it.distance,
                 }
                 for it in self.iterations
             ],
@@ -172,13 +177,91 @@ def _as_floats(point: Sequence[object], n: int, what: str) -> np.ndarray:
     return arr
 
 
-def _dilated_targets(model: LocalModel, y_from: np.ndarray, y_to: np.ndarray, anchor: str):
+def _candidates(
+    model: LocalModel, y_from: np.ndarray, y_to: np.ndarray, method: str
+) -> list[tuple[float, list[Segment], float]]:
+    """Nilpotent steerings toward ``y_to`` and toward its damped versions.
+
+    From the origin, ``δ_s`` of the target is reached by the inputs scaled by
+    ``s`` (homogeneity), so one steering serves every damping; otherwise the
+    target ``δ_s``-pulled toward ``y_from``'s anchor is steered to separately.
+    """
     tri = model.nilpotent
+    if tri.quasi_norm(y_from) <= 1e-15:
+        try:
+            steering = steer_nilpotent(tri, np.zeros_like(y_to), y_to, method=method)
+        except NilpotentError:
+            return []
+        return [(s, [seg.scaled(s) for seg in steering.segments], steering.error) for s in DAMPING]
+    out = []
     for s in DAMPING:
-        if anchor == "current":
-            yield s, y_from, tri.dilate(y_to, s)
-        else:
-            yield s, y_from, tri.dilate(y_from, 1.0 - s)
+        # y_to = 0 (the anchor) here: pull the start's image toward it
+        target = y_to if s == 1.0 else y_to + tri.dilate(y_from - y_to, 1.0 - s)
+        try:
+            steering = steer_nilpotent(tri, y_from, target, method=method)
+        except NilpotentError:
+            continue
+        out.append((s, list(steering.segments), steering.error))
+    return out
+
+
+def _iterate(
+    system: ControlSystem,
+    x0: np.ndarray,
+    xg: np.ndarray,
+    model_at: Callable[[np.ndarray], LocalModel],
+    target_model: LocalModel,
+    tol: float,
+    max_iterations: int,
+    method: str,
+) -> tuple[list[Segment], np.ndarray, float, list[Iteration], str]:
+    """Nilpotent steps from ``x0`` toward ``xg``; ``model_at(x_k)`` gives the local model.
+
+    A step is accepted when it decreases the homogeneous distance estimate
+    ``‖z(x)‖ = max_j |z_j(x)|^{1/w_j}`` in the privileged coordinates ``z`` of
+    ``target_model`` (centred at ``xg``): the Euclidean error is dominated by
+    the slow weight-2 directions and does not see progress in them.
+    """
+
+    def merit(x: np.ndarray) -> float:
+        z = target_model.forward(x)
+        return target_model.nilpotent.quasi_norm(z) if np.all(np.isfinite(z)) else math.inf
+
+    x = x0.copy()
+    error = float(np.linalg.norm(x - xg))
+    distance = merit(x)
+    segments: list[Segment] = []
+    history: list[Iteration] = []
+    while error > tol and len(history) < max_iterations:
+        t_it = time.perf_counter()
+        try:
+            model = model_at(x)
+        except SingularPointError as exc:
+            raise SingularPointError(f"the path meets a singular point: {exc}") from None
+        trials = _candidates(model, model.forward(x), model.forward(xg), method)
+        if not trials:
+            return segments, x, error, history, "the nilpotent system could not be steered"
+        ends = simulate_candidates(system, x, [segs for _, segs, _ in trials])
+        merits = np.array([merit(e) if np.all(np.isfinite(e)) else math.inf for e in ends])
+        pick = int(np.argmin(merits))
+        if not merits[pick] < distance:
+            return segments, x, error, history, (
+                f"no progress at iteration {len(history) + 1}: every nilpotent step "
+                f"(damped down to {trials[-1][0]}) leaves the distance to the goal at or "
+                f"above {distance:.3g}"
+            )
+        s, segs, nil_err = trials[pick]
+        x = ends[pick]
+        distance = float(merits[pick])
+        error = float(np.linalg.norm(x - xg))
+        segments.extend(segs)
+        history.append(
+            Iteration(error, s, len(segs), nil_err, time.perf_counter() - t_it, distance)
+        )
+    failure = ""
+    if error > tol:
+        failure = f"tolerance {tol:g} not reached in {max_iterations} iterations"
+    return segments, x, error, history, failure
 
 
 def plan(
@@ -188,7 +271,7 @@ def plan(
     tol: float = 1e-8,
     *,
     max_iterations: int = 30,
-    anchor: str = "current",
+    anchor: str = "auto",
     builder: str = "auto",
     method: str = "auto",
     raise_on_failure: bool = True,
@@ -201,19 +284,28 @@ def plan(
     sys:
         A bracket-generating system (parameters substituted from its values).
     start, goal:
-        Points in the model's coordinates (numbers; exact values are converted
-        to floats).
+        Points in the model's coordinates (sympy numbers or floats; exact
+        values are kept exact for the symbolic approximation).
     tol:
         Stop when ``‖x_k − goal‖`` (Euclidean) is at most ``tol``.
     max_iterations:
         Largest number of nilpotent steps.
     anchor:
-        ``"current"`` (re-approximate at every iterate, MATH.md §7) or
-        ``"goal"`` (one approximation, at the goal).
+        Where the approximations are taken:
+
+        * ``"current"``: at every iterate (MATH.md §7);
+        * ``"goal"``: once, at the goal;
+        * ``"start"``: once, at the start: the plan is computed *backwards*
+          from the goal to the start (anchored at its goal, the start) and
+          reversed (``u(t) → −u(T−t)``: a driftless system retraces its path);
+          the backward pass aims at ``tol/100`` so that the reversed controls
+          still meet ``tol``, and the forward error is checked by simulation;
+        * ``"auto"``: ``"current"`` with the numeric builder where fields and
+          first brackets span the space (step ≤ 2), else ``"start"``.
     builder:
         ``"numeric"`` (step ≤ 2, float linear adapted coordinates),
-        ``"symbolic"`` (:func:`nilpotent.core.approximation.approximate`) or
-        ``"auto"`` (numeric where fields and first brackets span the space).
+        ``"symbolic"`` (:func:`nilpotent.core.approximation.approximate`,
+        exact) or ``"auto"`` (numeric where possible).
     method:
         Nilpotent steering method (:data:`nilpotent.planning.nilpotent.METHODS`
         or ``"auto"``).
@@ -238,8 +330,8 @@ def plan(
     True
     """
     t_start = time.perf_counter()
-    if anchor not in ANCHORS:
-        raise PlanningError(f"unknown anchor {anchor!r} (choose from {', '.join(ANCHORS)})")
+    if anchor != "auto" and anchor not in ANCHORS:
+        raise PlanningError(f"unknown anchor {anchor!r} (choose from auto, {', '.join(ANCHORS)})")
     if builder != "auto" and builder not in BUILDERS:
         known = ", ".join(BUILDERS)
         raise PlanningError(f"unknown builder {builder!r} (choose from auto, {known})")
@@ -248,75 +340,49 @@ def plan(
     if max_iterations < 1:
         raise PlanningError(f"max_iterations must be >= 1, got {max_iterations}")
     system = sys
-    x = _as_floats(start, system.n, "start")
+    x0 = _as_floats(start, system.n, "start")
     xg = _as_floats(goal, system.n, "goal")
     if builder == "auto":
-        builder = choose_builder(system, xg)
+        builder = choose_builder(system, x0)
+    if anchor == "auto":
+        anchor = "current" if builder == "numeric" else "start"
     if builder == "numeric":
-        check_regular(system, x, "start")
+        check_regular(system, x0, "start")
         check_regular(system, xg, "goal")
     build = BUILDERS[builder]
+    initial_error = float(np.linalg.norm(x0 - xg))
 
-    error = float(np.linalg.norm(x - xg))
-    initial_error = error
-    segments: list[Segment] = []
-    history: list[Iteration] = []
-    goal_model = build(system, xg) if anchor == "goal" else None
-    failure = ""
-    while error > tol and len(history) < max_iterations:
-        t_it = time.perf_counter()
-        try:
-            model = goal_model if goal_model is not None else build(system, x)
-        except SingularPointError as exc:
-            raise SingularPointError(f"the path meets a singular point: {exc}") from None
-        y_from = model.forward(x)
-        y_to = model.forward(xg)
-        trials: list[tuple[float, list[Segment], float]] = []
-        if anchor == "current" and model.nilpotent.quasi_norm(y_from) <= 1e-15:
-            # from the origin, δ_s of the target is reached by the inputs scaled by s
-            try:
-                steering = steer_nilpotent(model.nilpotent, np.zeros_like(y_to), y_to,
-                                           method=method)
-                trials = [
-                    (s, [seg.scaled(s) for seg in steering.segments], steering.error)
-                    for s in DAMPING
-                ]
-            except NilpotentError:
-                trials = []
-        else:
-            for s, ya, yb in _dilated_targets(model, y_from, y_to, anchor):
-                try:
-                    steering = steer_nilpotent(model.nilpotent, ya, yb, method=method)
-                except NilpotentError:
-                    continue
-                trials.append((s, list(steering.segments), steering.error))
-        if not trials:
-            failure = "the nilpotent system could not be steered"
-            break
-        ends = simulate_candidates(system, x, [segs for _, segs, _ in trials])
-        errors = np.linalg.norm(ends - xg, axis=1)
-        errors[~np.isfinite(errors)] = np.inf
-        pick = next((i for i, e in enumerate(errors) if e < error), None)
-        if pick is None:
-            failure = (
-                f"no progress at iteration {len(history) + 1}: every nilpotent step "
-                f"(damped down to {trials[-1][0]}) leaves the error at or above {error:.3g}"
-            )
-            break
-        s, segs, nil_err = trials[pick]
-        x = ends[pick]
-        error = float(errors[pick])
-        segments.extend(segs)
-        history.append(
-            Iteration(error, s, len(segs), nil_err, time.perf_counter() - t_it)
+    if anchor == "start":
+        fixed = build(system, start)
+        back, _, _, history, failure = _iterate(
+            system, xg, x0, lambda x: fixed, fixed, max(tol / 100, 1e-13), max_iterations,
+            method,
         )
-    if error > tol and not failure:
-        failure = f"tolerance {tol:g} not reached in {max_iterations} iterations"
-    times, states = simulate_path(system, _as_floats(start, system.n, "start"), segments,
-                                  trajectory_points)
+        segments = list(reverse_segments(back))
+        x = simulate_candidates(system, x0, [segments])[0]
+        error = float(np.linalg.norm(x - xg))
+        if error <= tol:
+            failure = ""
+        elif not failure:
+            failure = f"the reversed backward plan misses the goal by {error:.3g}"
+    else:
+        at_goal = build(system, goal)
+        if anchor == "goal":
+
+            def model_at(x: np.ndarray) -> LocalModel:
+                return at_goal
+        else:
+
+            def model_at(x: np.ndarray) -> LocalModel:
+                return build(system, x)
+
+        segments, x, error, history, failure = _iterate(
+            system, x0, xg, model_at, at_goal, tol, max_iterations, method
+        )
+    times, states = simulate_path(system, x0, segments, trajectory_points)
     result = Plan(
         system=system,
-        start=tuple(float(v) for v in _as_floats(start, system.n, "start")),
+        start=tuple(float(v) for v in x0),
         goal=tuple(float(v) for v in xg),
         segments=tuple(segments),
         reached=tuple(float(v) for v in x),

@@ -144,7 +144,7 @@ def _fmt(p: np.ndarray) -> str:
     return "(" + ", ".join(f"{v:.6g}" for v in p) + ")"
 
 
-def numeric_model(system: ControlSystem, point: Sequence[float]) -> LocalModel:
+def numeric_model(system: ControlSystem, point: Sequence[object]) -> LocalModel:
     """The step-2 nilpotent approximation at ``point`` in linear adapted coordinates (floats).
 
     Raises
@@ -155,7 +155,7 @@ def numeric_model(system: ControlSystem, point: Sequence[float]) -> LocalModel:
         The step at the point is more than 2 (use the ``"symbolic"`` builder).
     """
     compiled = compiled_system(system)
-    p = np.asarray(point, dtype=float)
+    p = np.array([float(v) for v in point])  # type: ignore[arg-type]
     n = p.size
     fields, brackets = _values(compiled, p)
     n1 = _rank(fields)
@@ -215,26 +215,41 @@ def numeric_model(system: ControlSystem, point: Sequence[float]) -> LocalModel:
     return LocalModel(tuple(p), tri, forward, inverse, growth, "numeric")
 
 
-def symbolic_model(system: ControlSystem, point: Sequence[float]) -> LocalModel:
+def exact_point(point: Sequence[object]) -> tuple[sp.Expr, ...]:
+    """The point as exact sympy numbers: exact values kept, floats by their shortest decimal."""
+    out = []
+    for v in point:
+        if isinstance(v, sp.Basic) and v.is_number and not v.has(sp.Float):
+            out.append(v)
+        else:
+            out.append(sp.Rational(repr(float(v))))  # type: ignore[arg-type]
+    return tuple(out)
+
+
+def symbolic_model(system: ControlSystem, point: Sequence[object]) -> LocalModel:
     """The nilpotent approximation of :func:`nilpotent.core.approximation.approximate` at ``point``.
 
-    The point is passed as sympy floats; the result is converted to a
+    The point is made exact (:func:`exact_point`) and the symbolic work is
+    cached per (system, point); the result is converted to a
     :class:`TriangularSystem` and lambdified coordinate maps.
     """
-    try:
-        from nilpotent.core.approximation import approximate
-    except ImportError as exc:  # the core layer is always installed with the package
-        raise PlanningError(f"symbolic approximation unavailable: {exc}") from None
-    p = tuple(sp.Float(float(v), 17) for v in point)
-    approx = approximate(system, p)
+    return _symbolic_model(system, exact_point(point))
+
+
+@lru_cache(maxsize=32)
+def _symbolic_model(system: ControlSystem, point: tuple[sp.Expr, ...]) -> LocalModel:
+    from nilpotent.core.approximation import approximate
+
+    approx = approximate(system, point)
     filt = approx.filtration
-    if not getattr(filt, "bracket_generating", True):
+    fpoint = np.array([float(v) for v in point])
+    if not filt.bracket_generating:
         raise NotBracketGeneratingError(
-            f"{system.name} is not bracket generating at {_fmt(np.asarray(point, float))}"
+            f"{system.name} is not bracket generating at {_fmt(fpoint)}"
         )
-    if not getattr(filt, "regular", True):
+    if not filt.regular:
         raise SingularPointError(
-            f"{_fmt(np.asarray(point, float))} is a singular point of {system.name} "
+            f"{_fmt(fpoint)} is a singular point of {system.name} "
             f"(growth {tuple(filt.growth_vector)}, generic {tuple(filt.generic_growth_vector)})"
         )
     names = tuple(approx.coordinates.names)
@@ -252,13 +267,12 @@ def symbolic_model(system: ControlSystem, point: Sequence[float]) -> LocalModel:
         return np.asarray(inv(np.asarray(y, dtype=float)), dtype=float).reshape(-1)
 
     return LocalModel(
-        tuple(float(v) for v in point), tri, forward, inverse,
-        tuple(filt.growth_vector), "symbolic",
+        tuple(fpoint), tri, forward, inverse, tuple(filt.growth_vector), "symbolic"
     )
 
 
 #: Local-model builders by name.
-BUILDERS: dict[str, Callable[[ControlSystem, Sequence[float]], LocalModel]] = {
+BUILDERS: dict[str, Callable[[ControlSystem, Sequence[object]], LocalModel]] = {
     "numeric": numeric_model,
     "symbolic": symbolic_model,
 }
