@@ -124,3 +124,17 @@ def test_dop853_tableau_order_conditions():
     assert abs((b * c) @ a @ c - 1 / 8) < 1e-13
     # error estimators are differences of consistent weights: they sum to 0
     assert abs(sum(tab.e3)) < 1e-13 and abs(sum(tab.e5)) < 1e-13
+
+
+def test_jax_source_is_valid_python_using_jax_numpy():
+    """The JAX code is printed by sympy's JaxPrinter; check it without needing jax."""
+    import ast
+
+    from nilpotent.numeric.compile import _jax_source, _prepare
+
+    compiled = compile_system(get_model("trident-snake"))
+    text = _jax_source(_prepare(compiled.fields, compiled.n), "trident")
+    tree = ast.parse(text)
+    names = {f.name for f in tree.body if isinstance(f, ast.FunctionDef)}
+    assert names == {"fields", "rhs"}
+    assert "jax.numpy.sin" in text and "math." not in text and "numpy.sin" in text

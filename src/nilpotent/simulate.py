@@ -354,7 +354,7 @@ class Trajectory:
 
 
 def simulate(
-    system: ControlSystem | CompiledSystem,
+    sys: ControlSystem | CompiledSystem,
     signal: Signal | FunctionSignal,
     x0: Any = None,
     *,
@@ -374,7 +374,7 @@ def simulate(
     (``method``/``engine`` must then be left at their defaults or be
     ``"adaptive"``/``"scipy"``).
     """
-    compiled = _as_compiled(system)
+    compiled = _as_compiled(sys)
     if signal.m != compiled.m:
         raise OptionError(f"the signal has {signal.m} inputs, the system {compiled.m} fields")
     start = _float_point(compiled, x0)
@@ -653,7 +653,7 @@ def _prepare_comparison(
 
 
 def compare_bracket_motion(
-    system: ControlSystem,
+    sys: ControlSystem,
     bracket: Sequence[int],
     amplitude: float,
     *,
@@ -670,7 +670,7 @@ def compare_bracket_motion(
 
     Parameters
     ----------
-    system:
+    sys:
         The original system.
     bracket:
         ``(I, J)``, 1-based, different.
@@ -688,8 +688,8 @@ def compare_bracket_motion(
     engine:
         Integration engine (:data:`nilpotent.numeric.ENGINES`).
     """
-    bracket_signal(system.m, *_check_bracket(system.m, bracket), amplitude, omega, periods)
-    sysp, pair_ij, pt, approx, p = _prepare_comparison(system, bracket, point, approximation)
+    bracket_signal(sys.m, *_check_bracket(sys.m, bracket), amplitude, omega, periods)
+    sysp, pair_ij, pt, approx, p = _prepare_comparison(sys, bracket, point, approximation)
     pair = _simulate_pair(sysp, approx, p, pair_ij, np.array([float(amplitude)]), omega,
                           periods, samples, rtol, atol, engine)
     _check_status(pair)
@@ -816,7 +816,7 @@ class ScalingStudy:
 
 
 def scaling_study(
-    system: ControlSystem,
+    sys: ControlSystem,
     bracket: Sequence[int],
     amplitudes: Sequence[float] = DEFAULT_AMPLITUDES,
     *,
@@ -844,8 +844,8 @@ def scaling_study(
     if not np.all(np.isfinite(amps)) or np.any(amps <= 0):
         raise OptionError("amplitudes must be > 0")
     for a in amps:
-        bracket_signal(system.m, *_check_bracket(system.m, bracket), float(a), omega, periods)
-    sysp, pair_ij, pt, approx, p = _prepare_comparison(system, bracket, point, approximation)
+        bracket_signal(sys.m, *_check_bracket(sys.m, bracket), float(a), omega, periods)
+    sysp, pair_ij, pt, approx, p = _prepare_comparison(sys, bracket, point, approximation)
     pair = _simulate_pair(sysp, approx, p, pair_ij, amps, omega, periods, samples, rtol, atol,
                           engine)
     _check_status(pair)
