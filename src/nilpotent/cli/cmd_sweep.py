@@ -1,0 +1,238 @@
+"""``nilpotent sweep``: many bracket motions, original against nilpotent approximation.
+
+Over whole periods the loop frequency drops out (``s = ωt``), so a sweep is over
+the amplitude and the start point (and, with ``--vary``, model parameters).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from nilpotent.cli.app import (
+    AtOpt,
+    JsonOpt,
+    ModelArg,
+    ParamOpt,
+    app,
+    cli_errors,
+    emit_json,
+    load_model_option,
+    parse_float_list,
+    parse_int_pair,
+    parse_point_option,
+    stderr_console,
+    stdout_console,
+    write_atomically,
+)
+from nilpotent.errors import OptionError
+
+
+def parse_amplitudes(text: str) -> list[float]:
+    """``A1:A2:N`` (``N`` log-spaced amplitudes from A1 to A2) or ``A1,A2,...``."""
+    from nilpotent.sweep import amplitude_range
+
+    if ":" in text:
+        parts = [p.strip() for p in text.split(":")]
+        if len(parts) != 3:
+            raise OptionError(f"--amplitudes expects A1:A2:N or A1,A2,..., got {text!r}")
+        low, high = (parse_float_list(p, "--amplitudes")[0] for p in parts[:2])
+        if not parts[2].isdigit():
+            raise OptionError(f"--amplitudes {text}: N must be a positive integer")
+        return list(amplitude_range(low, high, int(parts[2])))
+    amps = parse_float_list(text, "--amplitudes")
+    for a in amps:
+        if not a > 0:
+            raise OptionError(f"--amplitudes: amplitudes must be > 0, got {a}")
+    return amps
+
+
+def _split_top_level(text: str) -> list[str]:
+    """Split at the commas outside parentheses (``atan2(1,2)`` stays whole)."""
+    parts, depth, start = [], 0, 0
+    for k, ch in enumerate(text):
+        if ch == "(":
+            depth += 1
+        elif ch == ")":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append(text[start:k])
+            start = k + 1
+    parts.append(text[start:])
+    return parts
+
+
+def parse_vary(items: list[str] | None) -> dict[str, list[Any]]:
+    """``--vary NAME=V1,V2,...`` (repeatable); values through the safe expression grammar."""
+    from nilpotent.core.expressions import parse_expression
+
+    out: dict[str, list[Any]] = {}
+    for item in items or []:
+        name, eq, values = item.partition("=")
+        name = name.strip()
+        if not eq or not name or not values.strip():
+            raise OptionError(f"--vary expects NAME=V1,V2,..., got {item!r}")
+        if name in out:
+            raise OptionError(f"--vary {name} is given twice")
+        pieces = _split_top_level(values)
+        if any(not p.strip() for p in pieces):
+            raise OptionError(f"--vary {item}: empty value")
+        out[name] = [parse_expression(p.strip(), {}, where=f"--vary {name}") for p in pieces]
+    return out
+
+
+def print_sweep(result) -> None:
+    """The summary for humans: statuses, error quantiles and fitted slopes per weight group."""
+    from rich.table import Table
+
+    console = stdout_console()
+    par = result.parameters
+    brackets = ", ".join(f"[X{i},X{j}]" for i, j in par.brackets)
+    console.print(
+        f"[bold]{par.model}[/bold]: {len(result)} bracket motions {brackets} "
+        f"({par.design} design, {par.periods} period(s); ω drops out), "
+        f"{result.backend} on {result.engine}, {result.wall_time:.2f} s"
+    )
+    summary = result.summary()
+    console.print(
+        f"succeeded {summary['succeeded']} of {summary['count']}; blow-ups {summary['blow_ups']}; "
+        f"other early stops {summary['failed'] - summary['blow_ups']}"
+    )
+    table = Table(title="errors |y − ŷ| per weight group (privileged coordinates)")
+    for col in ("weight", "end median", "end p90", "end max", "along median", "along p90",
+                "along max"):
+        table.add_column(col)
+
+    def cell(v: float | None) -> str:
+        return "–" if v is None else f"{v:.2e}"
+
+    for w in result.groups:
+        e = summary["endpoint_by_weight"][str(w)]
+        a = summary["along_by_weight"][str(w)]
+        table.add_row(str(w), cell(e["median"]), cell(e["p90"]), cell(e["max"]),
+                      cell(a["median"]), cell(a["p90"]), cell(a["max"]))
+    console.print(table)
+    fits = Table(title="log–log slope of the error against A (expected w + 1 from q0 = p)")
+    for col in ("parameters", "bracket", "weight", "slope (along)", "slope (end point)",
+                "expected"):
+        fits.add_column(col)
+    for fit in result.fits():
+        params = ", ".join(f"{k}={v}" for k, v in fit["parameters"].items()) or "–"
+        for w, slope in fit["slopes"].items():
+            end = fit["endpoint_slopes"][w]
+            fits.add_row(
+                params, f"[X{fit['bracket'][0]},X{fit['bracket'][1]}]", w,
+                "exact" if slope is None else f"{slope:.3f}",
+                "exact" if end is None else f"{end:.3f}",
+                str(fit["expected_slopes"][w]),
+            )
+    console.print(fits)
+
+
+@app.command("sweep")
+@cli_errors
+def sweep_command(
+    model: ModelArg,
+    bracket: Annotated[
+        list[str],
+        typer.Option("--bracket", metavar="I,J",
+                     help="Bracket pair (1-based, different fields); repeatable."),
+    ],
+    amplitudes: Annotated[
+        str,
+        typer.Option("--amplitudes", metavar="A1:A2:N|A1,A2,...",
+                     help="N log-spaced amplitudes from A1 to A2, or a list (all > 0)."),
+    ] = "0.01:0.16:5",
+    samples: Annotated[
+        int,
+        typer.Option("--samples", metavar="N",
+                     help="Grid: random start points (0: the start p only). Random: rows."),
+    ] = 0,
+    radius: Annotated[
+        float,
+        typer.Option("--radius", metavar="R",
+                     help="Start points uniform in the ball of radius R round p."),
+    ] = 0.0,
+    seed: Annotated[int, typer.Option("--seed", metavar="S", help="Random seed.")] = 0,
+    design: Annotated[
+        str, typer.Option("--design", metavar="grid|random", help="Sampling design.")
+    ] = "grid",
+    vary: Annotated[
+        list[str] | None,
+        typer.Option("--vary", metavar="NAME=V1,V2,...",
+                     help="Sweep a model parameter over these values (repeatable)."),
+    ] = None,
+    periods: Annotated[
+        int, typer.Option("--periods", metavar="K", help="Whole periods of the loop (>= 1).")
+    ] = 1,
+    rtol: Annotated[float, typer.Option("--rtol", help="Relative tolerance.")] = 1e-10,
+    bound: Annotated[
+        float, typer.Option("--bound", help="Stop (and report) a trajectory once |x_k| > bound.")
+    ] = 1e6,
+    chunk_size: Annotated[
+        int, typer.Option("--chunk-size", metavar="B", help="Trajectory pairs per chunk.")
+    ] = 4096,
+    dask: Annotated[
+        str | None,
+        typer.Option("--dask", metavar="ADDRESS|local",
+                     help="Run the chunks on Dask (needs pip install \"nilpotent[dask]\")."),
+    ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", metavar="FILE.csv", help="Write one CSV row per sample."),
+    ] = None,
+    at: AtOpt = None,
+    param: ParamOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Sweep bracket motions over amplitudes and start points; errors and fitted slopes."""
+    from nilpotent.sweep import DESIGNS, sweep
+
+    amps = parse_amplitudes(amplitudes)
+    if design not in DESIGNS:
+        raise OptionError(f"--design must be one of {', '.join(DESIGNS)}, got {design!r}")
+    if samples < 0:
+        raise OptionError(f"--samples must be >= 0, got {samples}")
+    if not (math.isfinite(radius) and radius >= 0):
+        raise OptionError(f"--radius must be >= 0, got {radius}")
+    if seed < 0:
+        raise OptionError(f"--seed must be >= 0, got {seed}")
+    if not (math.isfinite(rtol) and rtol > 0):
+        raise OptionError(f"--rtol must be > 0, got {rtol}")
+    if not (math.isfinite(bound) and bound > 0):
+        raise OptionError(f"--bound must be > 0, got {bound}")
+    if out is not None and not (out.parent == Path("") or out.parent.is_dir()):
+        raise OptionError(f"--out {out}: folder {out.parent} does not exist")
+    varied = parse_vary(vary)
+    system = load_model_option(model, param)
+    pairs = [parse_int_pair(b, "--bracket", system.m) for b in bracket]
+    point = parse_point_option(at, system)
+
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    with Progress(
+        "[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(),
+        TimeElapsedColumn(), console=stderr_console(), transient=True,
+    ) as bar:
+        task = bar.add_task("bracket motions", total=None)
+
+        def progress(done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total)
+
+        result = sweep(
+            system, pairs, amps, point=point, samples=samples, radius=radius, seed=seed,
+            design=design, vary=varied or None, periods=periods, rtol=rtol, atol=rtol * 1e-2,
+            bound=bound, chunk_size=chunk_size, dask=dask, progress=progress,
+        )
+    if out is not None:
+        with write_atomically(out, suffix=".csv") as tmp:
+            result.to_csv(tmp)
+    if json_out:
+        emit_json(result.to_json())
+        return
+    print_sweep(result)
+    if out is not None:
+        stdout_console().print(f"{len(result)} rows written to {out}")
