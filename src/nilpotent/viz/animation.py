@@ -107,7 +107,8 @@ def animate_motion_comparison(
     geom = geometry if geometry is not None else TridentGeometry()
     idx = _subsample(qo, frames)
     t = np.arange(qo.shape[0], dtype=float) if times is None else np.asarray(times, float)
-    fig = Figure(figsize=figsize, layout="constrained")
+    fig = Figure(figsize=figsize)  # fixed margins: a layout engine per frame is slow
+    fig.subplots_adjust(left=0.09, right=0.98, bottom=0.12, top=0.86, wspace=0.08)
     axes = fig.subplots(1, 2, sharex=True, sharey=True)
     both = np.concatenate([qo, qa])
     pts = np.concatenate([geom.wheels(both).reshape(-1, 2), geom.vertices(both).reshape(-1, 2)])
