@@ -7,7 +7,7 @@ paper's Section 4, ``r = l = 1``) and ``trident-snake-paper`` (its eq. ``vf``),
 :func:`~nilpotent.core.filtration.analyze`,
 :func:`~nilpotent.core.approximation.approximate`, brackets with
 :func:`~nilpotent.core.brackets.bracket`, and one-period simulations of the
-periodic inputs (:mod:`nilpotent.numeric`) — and compares them **when it
+periodic inputs (:mod:`nilpotent.simulate`) — and compares them **when it
 runs**.  Nothing in this module states a verdict in advance.
 
 Comparisons are exact where the objects are exact: two expressions are equal
@@ -309,31 +309,24 @@ class _Computed:
     def displacement_rate(self, sys: ControlSystem, i: int, j: int) -> tuple[float, ...]:
         """``Δx / (πA²)`` over one period of the ``(i, j)`` periodic input, extrapolated to A → 0.
 
-        One-period simulations at ``A = 0.02`` and ``0.01`` from the origin
-        (adaptive DOP853, rtol 1e-12); since ``Δx/(πA²) = [X_i,X_j](0) + c A +
-        O(A²)``, the Richardson combination ``2 r(A/2) − r(A)`` removes the
-        ``O(A)`` term.
+        One-period simulations (:func:`nilpotent.simulate.simulate`) at
+        ``A = 0.02`` and ``0.01`` from the origin (adaptive DOP853, rtol 1e-12);
+        since ``Δx/(πA²) = [X_i,X_j](0) + c A + O(A²)``, the Richardson
+        combination ``2 r(A/2) − r(A)`` removes the ``O(A)`` term.
         """
-        import numpy as np
-
-        from nilpotent.numeric import bracket_inputs, compile_system, integrate
+        from nilpotent.numeric import compile_system
+        from nilpotent.simulate import bracket_signal, simulate
 
         key = (sys.name, i, j)
         cache = self.__dict__.setdefault("_rates", {})
         if key not in cache:
-            compiled = self.__dict__.setdefault("_compiled", {})
-            if sys.name not in compiled:
-                compiled[sys.name] = compile_system(sys, backend="numpy")
-            amps = np.array([0.02, 0.01])
-            sol = integrate(
-                compiled[sys.name],
-                np.zeros((2, sys.n)),
-                bracket_inputs(sys.m, i, j, amps),
-                rtol=1e-12,
-                atol=1e-14,
-                engine="scipy",
-            )
-            rates = sol.final / (math.pi * amps[:, None] ** 2)
+            compiled = compile_system(sys, backend="numpy")
+            rates = []
+            for amp in (0.02, 0.01):
+                run = simulate(
+                    compiled, bracket_signal(sys.m, i, j, amp), samples=2, rtol=1e-12, atol=1e-14
+                )
+                rates.append(run.final / (math.pi * amp**2))
             cache[key] = tuple(float(v) for v in 2 * rates[1] - rates[0])
         return cache[key]
 

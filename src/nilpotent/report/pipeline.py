@@ -285,12 +285,13 @@ _STEPS = (
 
 def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) -> Reproduction:
     from nilpotent.core.approximation import approximate
+    from nilpotent.core.brackets import word_values_at
     from nilpotent.core.filtration import analyze
     from nilpotent.models import get_model
     from nilpotent.models.trident import TridentGeometry
     from nilpotent.report.audit import run_audit
     from nilpotent.report.paper import read_paper
-    from nilpotent.report.trajectories import amplitude_study, bracket_motion
+    from nilpotent.simulate import compare_bracket_motion, scaling_study
     from nilpotent.viz import (
         animate_motion_comparison,
         plot_bracket_motion,
@@ -361,11 +362,18 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
     # 4-5. motions and comparisons
     step(_STEPS[3])
     motions: dict[tuple[str, tuple[int, int]], Any] = {}
+    exact_brackets: dict[tuple[str, tuple[int, int]], tuple[sp.Expr, ...]] = {}
     for key in ("body", "vf"):
+        spec = systems[key].specialized()
         for pair in _PAIRS:
-            motions[key, pair] = bracket_motion(
-                approx[key], pair, settings.figure_amplitude, samples=settings.samples
+            motions[key, pair] = compare_bracket_motion(
+                systems[key],
+                pair,
+                settings.figure_amplitude,
+                approximation=approx[key],
+                samples=settings.samples,
             )
+            (exact_brackets[key, pair],) = word_values_at(spec, [pair], spec.origin())
     motion_rows = []
     for (key, pair), m in motions.items():
         stem = f"motion_{key}_{pair[0]}{pair[1]}"
@@ -374,16 +382,16 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
             + [f"{c}_original" for c in systems[key].coordinate_names]
             + [f"{c}_approximation" for c in systems[key].coordinate_names]
         )
-        rows = np.column_stack([m.times, m.original, m.approximation]).tolist()
+        rows = np.column_stack([m.times, m.original, m.approximate]).tolist()
         data.append(_write_csv(data_dir / f"{stem}.csv", header, rows))
         motion_rows.append(
             {
                 "model": systems[key].name,
                 "bracket": list(pair),
                 "amplitude": m.amplitude,
-                "bracket_at_0": [_fmt(v) for v in m.bracket_at_point],
+                "bracket_at_0": [_fmt(v) for v in exact_brackets[key, pair]],
                 "final_original": m.original[-1].tolist(),
-                "final_approximation": m.approximation[-1].tolist(),
+                "final_approximation": m.approximate[-1].tolist(),
                 "prediction": m.prediction.tolist(),
                 "endpoint_error": m.endpoint_error,
             }
@@ -412,7 +420,7 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
             k = s4_names[pair]
             fig, _ = plot_motion_comparison(
                 m.original,
-                m.approximation,
+                m.approximate,
                 geometry[key],
                 times=m.times,
                 title=f"[g{pair[0]},g{pair[1]}] (g{k}): {label}, original (dotted) vs "
@@ -434,7 +442,7 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
         k = s4_names[pair]
         anim = animate_motion_comparison(
             m.original,
-            m.approximation,
+            m.approximate,
             geometry["body"],
             times=m.times,
             frames=settings.frames,
@@ -447,16 +455,20 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
     # amplitude study
     step(_STEPS[6])
     studies = {
-        (key, pair): amplitude_study(approx[key], pair, settings.amplitudes)
+        (key, pair): scaling_study(
+            systems[key], pair, settings.amplitudes, approximation=approx[key]
+        )
         for key in ("vf", "body")
         for pair in _PAIRS
     }
     slopes: dict[str, dict[str, float | None]] = {}
     for (key, pair), st in studies.items():
         name = f"{systems[key].name} [X{pair[0]},X{pair[1]}]"
-        slopes[name] = {k: (None if v is None else round(v, 4)) for k, v in st.slopes.items()}
-        header = ["amplitude"] + [f"error_weight_{w}" for w in st.errors] + ["endpoint_error"]
-        rows = np.column_stack([st.amplitudes, *st.errors.values(), st.endpoint]).tolist()
+        slopes[name] = {
+            f"weight {w}": (None if v is None else round(v, 4)) for w, v in st.slopes.items()
+        }
+        header = ["amplitude"] + [f"error_weight_{w}" for w in st.errors]
+        rows = np.column_stack([st.amplitudes, *st.errors.values()]).tolist()
         data.append(_write_csv(data_dir / f"amplitude_{key}_{pair[0]}{pair[1]}.csv", header, rows))
     data.append(_write_json(data_dir / "slopes.json", slopes))
     scaling_stems = {}
@@ -467,27 +479,22 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
         axes = fig.subplots(1, 3, sharey=True)
         for ax, pair in zip(axes, _PAIRS, strict=True):
             st = studies[key, pair]
-            series = {
-                f"weight {w}": e
-                for w, e in st.errors.items()
-                if st.slopes[f"weight {w}"] is not None
-            }
-            series["endpoint (x)"] = st.endpoint
-            bounds = {f"weight {w}": float(w + 1) for w in st.errors}
+            series = {f"weight {w}": e for w, e in st.errors.items() if st.slopes[w] is not None}
+            bounds = {f"weight {w}": float(st.expected_slopes[w]) for w in st.errors}
             plot_error_scaling(
                 st.amplitudes, series, lower_bounds=bounds, ax=ax, title=f"[g{pair[0]},g{pair[1]}]"
             )
-            exact = [f"weight {w}" for w in st.errors if st.slopes[f"weight {w}"] is None]
+            exact = [f"weight {w}" for w in st.errors if st.slopes[w] is None]
             if exact:
                 ax.text(
                     0.02,
                     0.02,
-                    ", ".join(exact) + ": exact (round-off only)",
+                    ", ".join(exact) + f": below the noise floor {st.floor:.1g} (exact)",
                     transform=ax.transAxes,
                     fontsize=7,
                 )
         fig.suptitle(
-            f"{label}: error of the nilpotent approximation after one period "
+            f"{label}: largest error of the nilpotent approximation over one period "
             "(privileged coordinates by weight; theory: slope ≥ w + 1)"
         )
         stem = f"amplitude_{key}"
@@ -508,6 +515,7 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
         filtrations=filt,
         approximations=approx,
         motions=motions,
+        brackets=exact_brackets,
         studies=studies,
         s4_names=s4_names,
         fig_motion=fig_motion,
