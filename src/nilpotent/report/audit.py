@@ -570,7 +570,7 @@ def _check_motion_claims(paper: PaperContent, c: _Computed) -> Iterable[AuditEnt
             else (f"Section 4 robot: {where(b)}, angles {':'.join(_fmt(v) for v in b[3:])}")
         )
         why += (
-            f" (simulated Δq/(πA²) → {_fmt_vec([sp.Float(r, 4) for r in rate])}); "
+            f" (simulated Δq/(πA²) → {_fmt_rate(rate)}); "
             f"with eq. vf: {where(bv)}, angles {':'.join(_fmt(v) for v in bv[3:])}"
         )
         statement = f"Fig. ({claim.figure}), motion of g{claim.bracket} = [g{i},g{j}]: "
