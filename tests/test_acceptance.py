@@ -88,11 +88,26 @@ def grammar(text: str, names: dict[str, sp.Basic] | None = None, *, exact: bool 
     return conv(ast.parse(text, mode="eval"))
 
 
+FLOAT_TOL = 1e-9
+
+
 def is_zero(e) -> bool:
-    """Exact zero test with a high-precision numerical fallback."""
+    """Exact zero test with a high-precision numerical fallback.
+
+    Where the value carries decimals (a point given as ``theta=0.3``), zero means
+    below :data:`FLOAT_TOL`; polynomials are zero when all their coefficients are.
+    """
     e = sp.expand(sp.S(e))
     if e == 0:
         return True
+    if e.free_symbols:
+        gens = sorted(e.free_symbols, key=str)
+        try:
+            return all(is_zero(c) for c in sp.Poly(e, *gens).coeffs())
+        except sp.PolynomialError:
+            return sp.simplify(e) == 0
+    if e.has(sp.Float):
+        return abs(complex(e.evalf(30))) < FLOAT_TOL
     z = e.is_zero
     if z is not None:
         return bool(z)
@@ -252,7 +267,7 @@ def write_model(path: Path, name, coords, fields, params=None) -> Path:
         lines += ["", "[[fields]]"]
         for c, comp in zip(coords, X, strict=True):
             if comp != 0:
-                lines.append(f"{c} = {toml_str(str(comp))}")
+                lines.append(f"{toml_str(str(c))} = {toml_str(str(comp))}")
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -289,7 +304,9 @@ ANALYSIS_TYPES = {
 }
 
 
-def check_analysis(data, coords, fields, point, *, schema="nilpotent/analysis@1", name=None):
+def check_analysis(
+    data, coords, fields, point, *, schema="nilpotent/analysis@1", name=None, exact=True
+):
     """Every key and value of the analysis JSON against the oracle. Returns (growth, weights)."""
     for key, typ in ANALYSIS_TYPES.items():
         assert key in data, f"missing key {key!r}"
@@ -301,7 +318,7 @@ def check_analysis(data, coords, fields, point, *, schema="nilpotent/analysis@1"
     assert data["coordinates"] == names
     assert list(data["point"]) == names
     for c, v in zip(names, point, strict=True):
-        assert is_zero(grammar(data["point"][c]) - v), (c, data["point"][c], v)
+        assert is_zero(grammar(data["point"][c], exact=exact) - v), (c, data["point"][c], v)
     growth, bg = oracle_growth(fields, coords, point)
     assert all(type(g) is int for g in data["growth_vector"] + data["weights"])
     assert data["bracket_generating"] is bg
@@ -320,7 +337,7 @@ def check_analysis(data, coords, fields, point, *, schema="nilpotent/analysis@1"
     for w, col in zip(frame, data["frame_values"], strict=True):
         assert len(col) == len(coords)
         mine = [at(c, coords, point) for c in word_field(w, fields, coords)]
-        got = [grammar(v) for v in col]
+        got = [grammar(v, exact=exact) for v in col]
         assert all(is_zero(a - b) for a, b in zip(mine, got, strict=True)), (w, mine, got)
         values.append(mine)
     for ns in growth:
@@ -328,10 +345,10 @@ def check_analysis(data, coords, fields, point, *, schema="nilpotent/analysis@1"
     return growth, weights_of(growth)
 
 
-def check_approximation(data, coords, fields, point, *, method=None):
+def check_approximation(data, coords, fields, point, *, method=None, exact=True):
     """Re-derive every property of the nilpotent approximation from the returned JSON."""
     growth, weights = check_analysis(
-        data, coords, fields, point, schema="nilpotent/approximation@1"
+        data, coords, fields, point, schema="nilpotent/approximation@1", exact=exact
     )
     n, m, r = len(coords), len(fields), len(growth)
     assert growth[-1] == n
@@ -344,7 +361,7 @@ def check_approximation(data, coords, fields, point, *, method=None):
     assert all(isinstance(s, str) and s.isidentifier() for s in ynames)
     Y = sp.symbols(ynames)
     xmap = {str(c): c for c in coords}
-    yx = [grammar(e, xmap) for e in priv["expressions"]]
+    yx = [grammar(e, xmap, exact=exact) for e in priv["expressions"]]
     assert len(yx) == n
     # y(p) = 0 and y is a local diffeomorphism at p
     assert all(is_zero(at(e, coords, point)) for e in yx)
@@ -355,7 +372,7 @@ def check_approximation(data, coords, fields, point, *, method=None):
         assert nh_order(fields, coords, e, point, weights[j]) == weights[j], (j, e)
     # X̂: polynomials in y, homogeneous of degree −1
     ymap = {s: sym for s, sym in zip(ynames, Y, strict=True)}
-    hat = [[grammar(c, ymap) for c in comp] for comp in data["fields"]]
+    hat = [[grammar(c, ymap, exact=exact) for c in comp] for comp in data["fields"]]
     assert len(hat) == m and all(len(h) == n for h in hat)
     for h in hat:
         for j, c in enumerate(h):
@@ -364,10 +381,12 @@ def check_approximation(data, coords, fields, point, *, method=None):
                 continue
             assert c.free_symbols <= set(Y), c
             poly = sp.Poly(c, *Y)
-            for mon in poly.monoms():
+            for mon, coeff in poly.terms():
+                if is_zero(coeff):
+                    continue
                 assert sum(a * w for a, w in zip(mon, weights)) == weights[j] - 1, (j, c)
     # nilpotent of step r: brackets of length r + 1 vanish identically; growth at 0 equal
-    assert all(all(sp.expand(c) == 0 for c in B) for _, B in right_normed(hat, Y, r + 1))
+    assert all(all(is_zero(c) for c in B) for _, B in right_normed(hat, Y, r + 1))
     assert oracle_growth(hat, Y, [0] * n)[0] == growth
     # X_i − X̂_i of order >= 0 (a): ord_p(X_i y_j − X̂_ij(y(x))) >= w_j
     ysub = dict(zip(Y, yx, strict=True))
@@ -377,7 +396,7 @@ def check_approximation(data, coords, fields, point, *, method=None):
             assert nh_order(fields, coords, g, point, weights[j] - 1) >= weights[j], (i, j)
     # (b) with the product's inverse, where it says it is exact: weighted Taylor expansion
     if priv.get("inverse_exact") and "inverse" in priv:
-        xy = [grammar(e, ymap) for e in priv["inverse"]]
+        xy = [grammar(e, ymap, exact=exact) for e in priv["inverse"]]
         back = [sp.expand(e.subs(dict(zip(coords, xy)), simultaneous=True)) for e in yx]
         if all(is_zero(b - s) for b, s in zip(back, Y, strict=True)):
             t = sp.Symbol("t")
@@ -512,6 +531,27 @@ def test_trailer_rotated_step3_trig(cli, tmp_path):
     assert weights == (1, 1, 2, 3)
 
 
+@pytest.mark.parametrize(
+    "case, at_text",
+    [
+        ("unicycle", "a=0.5,c=0.3"),
+        ("unicycle", "c=0.785"),
+        ("engel", "z1=0.25,z2=-0.5"),
+    ],
+)
+def test_decimal_points(cli, tmp_path, case, at_text):
+    """INTERFACE.md: point values may be decimals; every property must still hold
+    (zero tests to 1e-9 in the oracle)."""
+    coords, fields = unicycle_sheared() if case == "unicycle" else engel_nonlinear()
+    f = write_model(tmp_path / "dec.toml", case, coords, fields)
+    given = dict(item.split("=") for item in at_text.split(","))
+    point = [sp.Float(given[str(c)]) if str(c) in given else sp.Integer(0) for c in coords]
+    data = run_json(cli, "analyze", f, "--at", at_text)
+    check_analysis(data, coords, fields, point, exact=False)
+    data = run_json(cli, "approximate", f, "--at", at_text)
+    check_approximation(data, coords, fields, point, exact=False)
+
+
 # ---------------------------------------------------------------------------------------------
 # (3) singular points
 # ---------------------------------------------------------------------------------------------
@@ -609,6 +649,55 @@ def test_engel_nonlinear_off_origin(cli, tmp_path, method):
     check_approximation(data, coords, fields, point, method=method)
 
 
+def _mutations(data):
+    """Wrong answers that a correct oracle must refuse (each a function of a deep copy)."""
+    def linear_coordinates(d):   # not privileged for this system (ord z4 = 2)
+        d["privileged"]["expressions"] = list(d["coordinates"])
+        d["privileged"].pop("inverse", None)
+
+    def wrong_coefficient(d):    # still homogeneous, but X1 − X̂1 is no longer of order >= 0
+        names = d["privileged"]["names"]
+        d["fields"][0][2] = f"({d['fields'][0][2]}) + {names[1]}"
+
+    def homogeneous_but_wrong(d):  # same graded structure, but not the part of degree w_j − 1
+        names = d["privileged"]["names"]
+        d["fields"][1][3] = f"({d['fields'][1][3]}) + 5*{names[1]}**2"
+
+    def not_homogeneous(d):
+        names = d["privileged"]["names"]
+        d["fields"][1][2] = f"({d['fields'][1][2]}) + {names[0]}**2"
+
+    def wrong_growth(d):
+        d["growth_vector"] = [2, 4]
+        d["weights"] = [1, 1, 2, 2]
+        d["step"] = 2
+
+    def wrong_frame_value(d):
+        d["frame_values"][2] = ["0", "0", "2", "0"]
+
+    def nonzero_at_p(d):
+        d["privileged"]["expressions"][0] = f"({d['privileged']['expressions'][0]}) + 1"
+
+    def wrong_step(d):
+        d["certificate"]["nilpotent_step"] = 2
+
+    return [linear_coordinates, wrong_coefficient, homogeneous_but_wrong, not_homogeneous, wrong_growth,
+            wrong_frame_value, nonzero_at_p, wrong_step]
+
+
+def test_oracle_refuses_wrong_answers(cli, tmp_path):
+    """The oracle itself: a correct answer passes, each corrupted copy of it fails."""
+    coords, fields = engel_nonlinear()
+    f = write_model(tmp_path / "engel_nl.toml", "engel-nonlinear", coords, fields)
+    data = run_json(cli, "approximate", f)
+    check_approximation(data, coords, fields, [0] * 4)
+    for mutate in _mutations(data):
+        bad = json.loads(json.dumps(data))
+        mutate(bad)
+        with pytest.raises(AssertionError):
+            check_approximation(bad, coords, fields, [0] * 4)
+
+
 # ---------------------------------------------------------------------------------------------
 # (6) three inputs, step 2, growth (3, 6)
 # ---------------------------------------------------------------------------------------------
@@ -643,6 +732,28 @@ def test_parameters_and_param_option(cli, tmp_path):
     assert data["bracket_generating"] is False and data["growth_vector"] == [2]
     status, out, _ = cli("analyze", f, "--param", "zz=1", "--json")
     assert status == 2 and "error" in json.loads(out)
+
+
+def test_json_model_file(cli, tmp_path):
+    """The same structure as JSON (INTERFACE.md), exact strings and plain numbers mixed."""
+    coords, fields = free_three_inputs()
+    doc = {
+        "name": "free3-json",
+        "coordinates": [str(c) for c in coords],
+        "parameters": {"k": 1},
+        "fields": [
+            {str(c): (str(comp) if comp not in (0, 1) else int(comp))
+             for c, comp in zip(coords, X, strict=True) if comp != 0}
+            for X in fields
+        ],
+    }
+    f = tmp_path / "free3.json"
+    f.write_text(json.dumps(doc))
+    data = run_json(cli, "analyze", f, "--at", "p2=1/3")
+    point = [sp.Rational(1, 3) if str(c) == "p2" else 0 for c in coords]
+    growth, _ = check_analysis(data, coords, fields, point, name="free3-json")
+    assert growth == (3, 6)
+    assert data.get("parameters", {"k": "1"}) == {"k": "1"}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -725,39 +836,51 @@ def _integrate(fields, coords, x0, i, j, A, omega, periods):
     return sol.y[:, -1]
 
 
-@pytest.mark.parametrize("case", ["unicycle", "engel"])
+@pytest.mark.parametrize("case", ["unicycle", "engel", "engel-omega2-periods2", "martinet"])
 def test_simulate_against_scipy(cli, tmp_path, case):
+    omega, periods, pair = 1.0, 1, (1, 2)
     if case == "unicycle":
         coords, fields = unicycle_sheared()
         point = [sp.Rational(1, 2), sp.Integer(0), sp.pi / 4]
         at_text = "a=1/2,c=pi/4"
+    elif case == "martinet":   # a singular point: weights (1, 1, 3)
+        coords, fields = martinet_mixed()
+        point = [sp.Integer(3), sp.Rational(1, 2), sp.Rational(-1, 2)]
+        at_text = "a=3,b=1/2,c=-1/2"
+        pair = (2, 1)
     else:
         coords, fields = engel_nonlinear()
         point = [sp.Rational(1, 2), 0, 0, 0]
         at_text = "z1=1/2"
+        if case != "engel":
+            omega, periods = 2.0, 2
     f = write_model(tmp_path / "sim.toml", case, coords, fields)
     A = 0.05
-    data = run_json(cli, "simulate", f, "--bracket", "1,2", "--amplitude", str(A), "--at", at_text)
+    data = run_json(
+        cli, "simulate", f, "--bracket", f"{pair[0]},{pair[1]}", "--amplitude", str(A),
+        "--omega", str(omega), "--periods", str(periods), "--at", at_text,
+    )
     assert data["schema"] == "nilpotent/simulation@1"
-    assert data["bracket"] == [1, 2] and data["amplitude"] == A
-    assert data["omega"] == 1.0 and data["periods"] == 1
+    assert data["bracket"] == list(pair) and data["amplitude"] == A
+    assert data["omega"] == omega and data["periods"] == periods
     assert data["coordinates"] == [str(c) for c in coords]
+    assert list(data["point"]) == [str(c) for c in coords]
     p = np.array([float(v) for v in point])
-    end = _integrate(fields, coords, p, 1, 2, A, 1.0, 1)
+    end = _integrate(fields, coords, p, *pair, A, omega, periods)
     got = np.array(data["final"]["original"], dtype=float)
     assert np.max(np.abs(got - end)) < 1e-8, (got, end)
-    B = [at(c, coords, point) for c in lie_bracket(fields[0], fields[1], coords)]
-    pred = p + math.pi * A**2 * np.array([float(b) for b in B])
+    B = [at(c, coords, point) for c in lie_bracket(fields[pair[0] - 1], fields[pair[1] - 1], coords)]
+    pred = p + periods * math.pi * A**2 * np.array([float(b) for b in B])
     assert np.allclose(data["prediction"], pred, rtol=0, atol=1e-12)
     # the loop realises the bracket to O(A^3)
-    assert np.max(np.abs(end - pred)) < 10 * A**3
+    assert np.max(np.abs(end - pred)) < 10 * periods * A**3
     # the approximation: integrate X̂ (the default approximation) in y from 0, compare in y
     appr = run_json(cli, "approximate", f, "--at", at_text)
     weights = appr["weights"]
     Y = sp.symbols(appr["privileged"]["names"])
     ymap = {str(s): s for s in Y}
     hat = [[grammar(c, ymap) for c in comp] for comp in appr["fields"]]
-    yhat_end = _integrate(hat, Y, np.zeros(len(Y)), 1, 2, A, 1.0, 1)
+    yhat_end = _integrate(hat, Y, np.zeros(len(Y)), *pair, A, omega, periods)
     xmap = {str(c): c for c in coords}
     yx = [sp.lambdify(coords, grammar(e, xmap), "numpy") for e in appr["privileged"]["expressions"]]
     y_of = lambda x: np.array([float(g(*x)) for g in yx])  # noqa: E731
