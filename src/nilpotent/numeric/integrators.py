@@ -28,9 +28,10 @@ never raised (:meth:`BatchSolution.raise_for_status` raises when wanted).
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any
@@ -219,22 +220,68 @@ def integrate(
     if min_step is None:
         min_step = 1e-13 * float(np.max(total))
     chosen = _choose_engine(system, method, engine, batch)
-    if threads is not None and chosen == "numba":
-        import numba
-
-        numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
     common = dict(
         rtol=float(rtol), atol=float(atol), max_steps=int(max_steps),
         min_step=float(min_step), bound=float(bound),
     )
+    with _numba_threads(threads if chosen == "numba" else None):
+        final, samples, info, err, tolerance = _solve(
+            system, xs, sig, ts, method, chosen, int(steps), estimate_error, common
+        )
+    return BatchSolution(
+        method=method,
+        engine=chosen,
+        x0=_ro(xs),
+        final=_ro(final),
+        times=_ro(ts),
+        samples=_ro(samples),
+        status=_ro(info[:, 0].astype(np.int64)),
+        steps=_ro(info[:, 1].astype(np.int64)),
+        rejected=_ro(info[:, 2].astype(np.int64)),
+        error_estimate=_ro(err),
+        tolerance=tolerance,
+        rtol=float(rtol),
+        atol=float(atol),
+        steps_per_segment=int(steps) if method == "fixed" else 0,
+    )
+
+
+@contextlib.contextmanager
+def _numba_threads(threads: int | None) -> Iterator[None]:
+    """Run with ``threads`` numba threads, restoring the previous setting afterwards."""
+    if threads is None:
+        yield
+        return
+    import numba
+
+    previous = numba.get_num_threads()
+    numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
+    try:
+        yield
+    finally:
+        numba.set_num_threads(previous)
+
+
+def _solve(
+    system: CompiledSystem,
+    xs: np.ndarray,
+    sig: HarmonicInputs,
+    ts: np.ndarray,
+    method: str,
+    chosen: str,
+    steps: int,
+    estimate_error: bool,
+    common: dict[str, Any],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    batch = xs.shape[0]
     if chosen == "scipy":
         final, samples, info = _run_scipy(system, xs, sig, ts, **common)
     elif chosen == "numba":
-        final, samples, info = _run_numba(system, xs, sig, ts, method == "adaptive", int(steps),
+        final, samples, info = _run_numba(system, xs, sig, ts, method == "adaptive", steps,
                                           **common)
     else:
         with np.errstate(over="ignore", invalid="ignore"):  # stopped trajectories
-            final, samples, info = _run_numpy(system, xs, sig, ts, int(steps), **common)
+            final, samples, info = _run_numpy(system, xs, sig, ts, steps, **common)
     status = info[:, 0].astype(np.int64)
     if chosen == "numba" and method == "adaptive":
         err = info[:, 3].copy()
@@ -242,7 +289,7 @@ def integrate(
         err = np.full(batch, np.nan)
     if method == "fixed":
         if estimate_error:
-            half = int(steps) // 2
+            half = steps // 2
             if chosen == "numba":
                 f2, s2, _ = _run_numba(system, xs, sig, ts, False, half, **common)
             else:
@@ -258,23 +305,8 @@ def integrate(
         else:
             tolerance = float("nan")
     else:
-        tolerance = float(rtol)
-    return BatchSolution(
-        method=method,
-        engine=chosen,
-        x0=_ro(xs),
-        final=_ro(final),
-        times=_ro(ts),
-        samples=_ro(samples),
-        status=_ro(status),
-        steps=_ro(info[:, 1].astype(np.int64)),
-        rejected=_ro(info[:, 2].astype(np.int64)),
-        error_estimate=_ro(err),
-        tolerance=tolerance,
-        rtol=float(rtol),
-        atol=float(atol),
-        steps_per_segment=int(steps) if method == "fixed" else 0,
-    )
+        tolerance = float(common["rtol"])
+    return final, samples, info, err, tolerance
 
 
 def _check_times(times: Any, total: np.ndarray) -> np.ndarray:
