@@ -217,7 +217,8 @@ def bracket(
 # --- symengine word fields, cached per system --------------------------------
 
 
-def _se_coords(sys: ControlSystem) -> tuple[se.Symbol, ...]:
+def se_coordinates(sys: ControlSystem) -> tuple[se.Symbol, ...]:
+    """The coordinates of ``sys`` as symengine symbols (cached)."""
     cache = sys._cache
     key = "brackets.se_coords"
     if key not in cache:
@@ -258,7 +259,8 @@ def se_bracket(X: SeField, Y: SeField, coords: Sequence[se.Symbol]) -> SeField:
 def word_field_symengine(sys: ControlSystem, word: Word) -> SeField:
     """The field of ``word`` as symengine expressions, expanded, cached on ``sys``.
 
-    Parameters are substituted (the fields are ``sys.specialized_fields``).
+    Parameters are substituted (the fields are ``sys.specialized_fields``);
+    $[v, u]$ is reused as $-[u, v]$.
     """
     cache: dict[Word, SeField] = sys._cache.setdefault(_CACHE_KEY, {})
     hit = cache.get(word)
@@ -268,12 +270,21 @@ def word_field_symengine(sys: ControlSystem, word: Word) -> SeField:
         if not 1 <= word <= sys.m:
             raise OptionError(f"{format_word(word)} is not a field of {sys.name!r} (m = {sys.m})")
         value = tuple(se.expand(to_symengine(e)) for e in sys.specialized_fields[word - 1])
+    elif word[0] == word[1]:
+        value = tuple(se.Integer(0) for _ in range(sys.n))
+    elif (word[1], word[0]) in cache:
+        value = tuple(se.expand(-e) for e in cache[(word[1], word[0])])
     else:
-        value = se_bracket(
-            word_field_symengine(sys, word[0]), word_field_symengine(sys, word[1]), _se_coords(sys)
-        )
+        left = word_field_symengine(sys, word[0])
+        right = word_field_symengine(sys, word[1])
+        value = se_bracket(left, right, se_coordinates(sys))
     cache[word] = value
     return value
+
+
+def is_built(sys: ControlSystem, word: Word) -> bool:
+    """Whether the symbolic field of ``word`` is already cached on ``sys``."""
+    return isinstance(word, int) or word in sys._cache.get(_CACHE_KEY, {})
 
 
 def word_field(sys: ControlSystem, word: Word) -> tuple[sp.Expr, ...]:
@@ -301,7 +312,7 @@ def word_field(sys: ControlSystem, word: Word) -> tuple[sp.Expr, ...]:
 def _point_substitution(sys: ControlSystem, point: Sequence[sp.Expr]) -> dict[se.Symbol, se.Basic]:
     if len(point) != sys.n:
         raise PointError(f"a point of {sys.name!r} has {sys.n} coordinates, got {len(point)}")
-    return {x: to_symengine(v) for x, v in zip(_se_coords(sys), point, strict=True)}
+    return {x: to_symengine(v) for x, v in zip(se_coordinates(sys), point, strict=True)}
 
 
 def _check_finite(value: sp.Expr, sys: ControlSystem, point: Sequence[sp.Expr]) -> None:
@@ -312,26 +323,70 @@ def _check_finite(value: sp.Expr, sys: ControlSystem, point: Sequence[sp.Expr]) 
         )
 
 
+def _exact_directional(e: se.Basic, subs: dict, direction: dict, t: se.Symbol) -> se.Basic:
+    """$\\frac{d}{dt} e(p + t\\,w)|_{t=0}$ exactly (``subs`` is $p$, ``direction`` is $w$)."""
+    free = e.free_symbols
+    moving = {x: subs[x] + t * direction[x] for x in free if direction.get(x, 0) != 0}
+    if not moving:
+        return se.Integer(0)
+    fixed = {x: subs[x] for x in free if x not in moving}
+    return se.expand(e.subs(fixed).subs(moving).diff(t).subs({t: 0}))
+
+
+def word_values_symengine(
+    sys: ControlSystem, word: Word, subs: dict[se.Symbol, se.Basic]
+) -> tuple[se.Basic, ...]:
+    """Exact value of a word's field at the point ``subs`` (symengine numbers, expanded).
+
+    If the word's field is not cached yet and the word is $[u, v]$, the value is
+    $Dv(p)\\,u(p) - Du(p)\\,v(p)$ from directional derivatives of the (built)
+    fields of ``u`` and ``v``: the field of the longest words is never expanded.
+    """
+    cache: dict[Word, SeField] = sys._cache.setdefault(_CACHE_KEY, {})
+    if word in cache or isinstance(word, int):
+        return tuple(se.expand(e.subs(subs)) if e.free_symbols else e
+                     for e in word_field_symengine(sys, word))
+    u, v = word
+    fu, fv = word_field_symengine(sys, u), word_field_symengine(sys, v)
+    uval = word_values_symengine(sys, u, subs)
+    vval = word_values_symengine(sys, v, subs)
+    coords = se_coordinates(sys)
+    t = se.Dummy("t")
+    du = dict(zip(coords, uval, strict=True))
+    dv = dict(zip(coords, vval, strict=True))
+    return tuple(
+        se.expand(_exact_directional(b, subs, du, t) - _exact_directional(a, subs, dv, t))
+        for a, b in zip(fu, fv, strict=True)
+    )
+
+
 def word_values_at(
     sys: ControlSystem, words: Iterable[Word], point: Sequence[sp.Expr]
 ) -> tuple[tuple[sp.Expr, ...], ...]:
     """Exact values at ``point`` of the fields of ``words``.
 
     Returns ``values[k][j]``, the $x_{j+1}$-component of word ``k`` at the point, as
-    sympy numbers (exact where the point is exact; e.g. ``sqrt(3)/2``).
+    sympy numbers (exact where the point is exact; e.g. ``sqrt(3)/2``).  A word
+    $[u, v]$ whose field is not cached is evaluated as $Dv(p)u(p) - Du(p)v(p)$
+    (see :func:`word_values_symengine`).
 
     Raises
     ------
     PointError
         If the point has the wrong length or a field is undefined there.
+
+    Examples
+    --------
+    >>> x, y, th = sp.symbols("x y theta")
+    >>> s = ControlSystem("unicycle", (x, y, th), ((sp.cos(th), sp.sin(th), 0), (0, 0, 1)))
+    >>> word_values_at(s, [(1, 2), (2, (1, 2))], (0, 0, sp.pi / 2))
+    ((1, 0, 0), (0, 1, 0))
     """
     subs = _point_substitution(sys, point)
     out = []
     for w in words:
-        vals = []
-        for e in word_field_symengine(sys, w):
-            v = sp.S(se.expand(e.subs(subs))) if e.free_symbols else sp.S(e)
+        vals = tuple(sp.S(v) for v in word_values_symengine(sys, w, subs))
+        for v in vals:
             _check_finite(v, sys, point)
-            vals.append(v)
-        out.append(tuple(vals))
+        out.append(vals)
     return tuple(out)

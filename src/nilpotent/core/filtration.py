@@ -33,6 +33,7 @@ How it is computed
 
 from __future__ import annotations
 
+import math
 import random
 import re
 from collections.abc import Sequence
@@ -47,6 +48,8 @@ from nilpotent.core.brackets import (
     Word,
     format_word,
     hall_basis,
+    is_built,
+    se_coordinates,
     to_symengine,
     word_field_symengine,
     word_length,
@@ -56,10 +59,24 @@ from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NotBracketGeneratingError, PointError
 
 GENERIC_TOL = 1e-30
-"""Relative tolerance of the rank decisions at random points (212-bit evaluation)."""
+"""Relative tolerance of the 212-bit rank decisions at random points."""
+
+GENERIC_ZERO = 1e-40
+"""Norm below which a 212-bit value of a word at a random point is zero."""
+
+DOUBLE_INDEPENDENT = 1e-6
+DOUBLE_DEPENDENT = 1e-10
+DOUBLE_ZERO = 1e-9
+"""Double-precision thresholds at random points; between them, 212-bit values decide."""
+
+COMPLEX_STEP = 1e-4
+"""Relative step of the complex-step derivatives at random points."""
 
 POINT_TOL = 1e-25
 """Relative tolerance of numerical rank decisions at ``p`` (50-digit evaluation)."""
+
+POINT_ZERO = 1e-35
+"""Norm below which a 50-digit value at ``p`` is zero."""
 
 GENERIC_PREC_BITS = 212
 _GENERIC_DPS = 60
@@ -123,45 +140,56 @@ class Filtration:
 # --- rank trackers ------------------------------------------------------------
 
 
-class _NumericSpan:
-    """Incremental span of real vectors, rank decided by SVD with a relative tolerance."""
+def _residual(basis: list[list], vec: list, fsum) -> tuple[float, list]:
+    """Distance of the unit vector ``vec`` to the span of the orthonormal ``basis``.
 
-    def __init__(self, tol: float, dps: int) -> None:
-        self.tol = tol
-        self.dps = dps
-        self.rows: list[list[mpmath.mpf]] = []
+    Gram–Schmidt applied twice (stable); returns the distance and the residual.
+    """
+    res = list(vec)
+    for _ in range(2):
+        for b in basis:
+            c = fsum(x * y for x, y in zip(res, b, strict=True))
+            res = [x - c * y for x, y in zip(res, b, strict=True)]
+    return fsum(x * x for x in res) ** 0.5, res
 
-    @property
-    def rank(self) -> int:
-        return len(self.rows)
+
+class _MpSpan:
+    """Incremental span of real vectors at ``dps`` digits.
+
+    A vector is independent when its distance to the span, after normalising it
+    to unit length, exceeds ``tol``; a vector of norm below ``zero`` is zero
+    (trigonometric identities leave such rounding residues).
+    """
+
+    def __init__(self, tol: float, zero: float, dps: int) -> None:
+        self.tol, self.zero, self.dps = tol, zero, dps
+        self.basis: list[list[mpmath.mpf]] = []
 
     def try_add(self, vec: Sequence[mpmath.mpf]) -> bool:
         with mpmath.workdps(self.dps):
             norm = mpmath.sqrt(mpmath.fsum(v * v for v in vec))
-            if norm == 0:
+            if norm <= self.zero:
                 return False
-            row = [v / norm for v in vec]
-            mat = mpmath.matrix([*self.rows, row])
-            sv = mpmath.svd_r(mat, compute_uv=False)
-            smallest = min(sv[i] for i in range(len(self.rows) + 1))
-            if smallest <= self.tol:
+            dist, res = _residual(self.basis, [v / norm for v in vec], mpmath.fsum)
+            if dist <= self.tol:
                 return False
-        self.rows.append(row)
+            self.basis.append([x / dist for x in res])
         return True
 
 
 class _ExactSpan:
     """Incremental span of exact vectors (rational or algebraic entries).
 
-    Falls back to 50-digit numerics for entries that are not algebraic numbers
-    (e.g. ``cos(1)``) and records it in :attr:`exact`.
+    Ranks by fraction-free elimination over $\\mathbb{Q}$ or a number field; falls
+    back to 50-digit numerics (tolerance :data:`POINT_TOL`) for entries that are
+    not algebraic numbers (e.g. ``cos(1)``) and records it in :attr:`exact`.
     """
 
     def __init__(self, n: int) -> None:
         self.n = n
         self.rows: list[tuple[sp.Expr, ...]] = []
         self.exact = True
-        self._numeric = _NumericSpan(POINT_TOL, 50)
+        self._numeric = _MpSpan(POINT_TOL, POINT_ZERO, 50)
 
     @property
     def rank(self) -> int:
@@ -177,11 +205,12 @@ class _ExactSpan:
         if self.exact and not self._decidable(vec):
             self.exact = False
             for row in self.rows:
-                self._numeric.rows.append(_normalised(_mp_vector(row, 50), 50))
+                self._numeric.try_add(_mp_vector(row, 50))
         if self.exact:
             rows = [*self.rows, vec]
-            dm = DomainMatrix.from_list_sympy(len(rows), self.n, [list(r) for r in rows],
-                                              extension=True)
+            dm = DomainMatrix.from_list_sympy(
+                len(rows), self.n, [list(r) for r in rows], extension=True
+            )
             if not dm.domain.is_Field:
                 dm = dm.to_field()
             if dm.rank() <= len(self.rows):
@@ -197,21 +226,19 @@ def _mp_vector(vec: Sequence[sp.Expr], dps: int) -> list[mpmath.mpf]:
         return [mpmath.mpf(str(sp.N(e, dps + 10))) for e in vec]
 
 
-def _normalised(vec: list[mpmath.mpf], dps: int) -> list[mpmath.mpf]:
-    with mpmath.workdps(dps):
-        norm = mpmath.sqrt(mpmath.fsum(v * v for v in vec))
-        return [v / norm for v in vec]
-
-
 # --- generic growth vector ----------------------------------------------------
 
 
-def _random_points(point: Sequence[sp.Expr], count: int) -> list[list[se.Basic]]:
+class _Undefined(Exception):
+    """A field cannot be evaluated (pole, complex value) at a random point."""
+
+
+def _random_points(point: Sequence[sp.Expr], count: int) -> list[list[sp.Expr]]:
     """Pseudo-random exact points near ``point``: ``p + δ`` with rational ``δ``.
 
-    Exact, so that evaluation at 212 bits is accurate throughout (symengine
-    would round rational coefficients to double precision if floats were
-    substituted).  Floats in ``point`` are replaced by their exact binary value.
+    Exact, so that they can be evaluated at any precision (symengine rounds
+    rational coefficients to double precision when floats are substituted).
+    Floats in ``point`` are replaced by their exact binary value.
     """
     rng = random.Random(_SEED)
     den = 2**20
@@ -221,60 +248,191 @@ def _random_points(point: Sequence[sp.Expr], count: int) -> list[list[se.Basic]]
         vals = []
         for v in point:
             centre = v.replace(lambda e: e.is_Float, lambda e: sp.Rational(e))
-            delta = sp.Rational(rng.randint(-half, half), den)
-            vals.append(to_symengine(centre + delta))
+            vals.append(centre + sp.Rational(rng.randint(-half, half), den))
         out.append(vals)
     return out
 
 
-def _numeric_values(sys: ControlSystem, word: Word, subs: dict) -> list[mpmath.mpf] | None:
-    """Values of a word's field at an exact point, evaluated with 212-bit floats."""
-    vals = []
-    for e in word_field_symengine(sys, word):
-        v = e.subs(subs) if e.free_symbols else e
-        try:
-            c = v.n(GENERIC_PREC_BITS, real=True)
-        except (TypeError, RuntimeError, ValueError):
-            return None
-        text = str(c)
-        if not _FINITE.fullmatch(text):
-            return None
-        with mpmath.workdps(_GENERIC_DPS + 10):
-            vals.append(mpmath.mpf(text))
-    return vals
+def _as_float(v: se.Basic) -> float:
+    try:
+        c = complex(v)
+    except (TypeError, RuntimeError, ValueError) as exc:
+        raise _Undefined from exc
+    if not math.isfinite(c.real) or c.imag != 0:
+        raise _Undefined
+    return c.real
 
 
-def _generic_growth_at(sys: ControlSystem, values: list[se.Basic]) -> tuple[int, ...] | None:
-    """Growth vector at a (random, assumed regular) point; None if a field is undefined there."""
-    from nilpotent.core.brackets import _se_coords
+class _GenericPoint:
+    """Values of words at one random point ``q``: doubles, and 212-bit when needed.
 
-    subs = dict(zip(_se_coords(sys), values, strict=True))
-    span = _NumericSpan(GENERIC_TOL, _GENERIC_DPS)
+    Words whose field is not built yet, $[u, v]$, are evaluated as
+    $Dv(q)u(q) - Du(q)v(q)$ from directional derivatives of the fields of ``u``
+    and ``v``, so the longest fields are never expanded.
+    """
+
+    def __init__(self, sys: ControlSystem, exact_point: Sequence[sp.Expr]) -> None:
+        self.sys = sys
+        coords = se_coordinates(sys)
+        self.exact = dict(zip(coords, (to_symengine(v) for v in exact_point), strict=True))
+        self.q = {x: float(sp.N(v, 20)) for x, v in zip(coords, exact_point, strict=True)}
+        self.doubles = {x: se.RealDouble(v) for x, v in self.q.items()}
+        self._dcache: dict[Word, list[float]] = {}
+        self._hcache: dict[Word, list[mpmath.mpf]] = {}
+
+    def double(self, word: Word) -> list[float]:
+        """Values in double precision."""
+        hit = self._dcache.get(word)
+        if hit is not None:
+            return hit
+        if is_built(self.sys, word):
+            vals = [
+                _as_float(e.subs(self.doubles) if e.free_symbols else e)
+                for e in word_field_symengine(self.sys, word)
+            ]
+        else:
+            u, v = word
+            fu, fv = word_field_symengine(self.sys, u), word_field_symengine(self.sys, v)
+            uq, vq = self.double(u), self.double(v)
+            try:
+                vals = [
+                    b - a
+                    for a, b in zip(self._step(fu, vq), self._step(fv, uq), strict=True)
+                ]
+            except _Undefined:
+                word_field_symengine(self.sys, word)
+                vals = self.double(word)
+        self._dcache[word] = vals
+        return vals
+
+    def _step(self, field: Sequence[se.Basic], direction: Sequence[float]) -> list[float]:
+        """Directional derivative $\\frac{d}{dt} Z(q + t d)|_{t=0}$ of ``field``, in doubles.
+
+        Complex step $\\operatorname{Im} Z(q + i h d)/h$ (no cancellation), with
+        Richardson extrapolation over $h$ and $2h$ (error $O(h^4)$), $h = 10^{-4}/|d|_\\infty$.
+        Raises :class:`_Undefined` where the field has no complex extension in
+        symengine (``atan2``); the caller then builds the bracket instead.
+        """
+        scale = max(abs(d) for d in direction)
+        if scale == 0:
+            return [0.0] * len(field)
+        h = COMPLEX_STEP / scale
+        steps = []
+        for hh in (h, 2 * h):
+            subs = {
+                x: se.S(complex(self.q[x], hh * d)) if d != 0 else self.doubles[x]
+                for x, d in zip(self.q, direction, strict=True)
+            }
+            row = []
+            for e in field:
+                if not e.free_symbols:
+                    row.append(0.0)
+                    continue
+                try:
+                    c = complex(e.subs(subs))
+                except (TypeError, RuntimeError, ValueError) as exc:
+                    raise _Undefined from exc
+                if not (math.isfinite(c.real) and math.isfinite(c.imag)):
+                    raise _Undefined
+                row.append(c.imag / hh)
+            steps.append(row)
+        return [(4 * a - b) / 3 for a, b in zip(*steps, strict=True)]
+
+    def precise(self, word: Word) -> list[mpmath.mpf]:
+        """Values at 212 bits (the word's field is built for it)."""
+        hit = self._hcache.get(word)
+        if hit is not None:
+            return hit
+        vals = []
+        for e in word_field_symengine(self.sys, word):
+            v = e.subs(self.exact) if e.free_symbols else e
+            try:
+                text = str(v.n(GENERIC_PREC_BITS, real=True))
+            except (TypeError, RuntimeError, ValueError) as exc:
+                raise _Undefined from exc
+            if not _FINITE.fullmatch(text):
+                raise _Undefined
+            with mpmath.workdps(_GENERIC_DPS + 10):
+                vals.append(mpmath.mpf(text))
+        self._hcache[word] = vals
+        return vals
+
+
+class _GenericSpan:
+    """Span of word values at a random point: double precision, 212 bits when unclear.
+
+    After normalising, a distance to the span above :data:`DOUBLE_INDEPENDENT` is
+    independent and one below :data:`DOUBLE_DEPENDENT` dependent; in between (or
+    for a vector of norm below :data:`DOUBLE_ZERO`) the decision is redone from
+    212-bit values with :data:`GENERIC_TOL`.
+    """
+
+    def __init__(self, at: _GenericPoint) -> None:
+        self.at = at
+        self.words: list[Word] = []
+        self.basis: list[list[float]] = []
+
+    @property
+    def rank(self) -> int:
+        return len(self.words)
+
+    def try_add(self, word: Word) -> bool:
+        vec = self.at.double(word)
+        norm = math.fsum(v * v for v in vec) ** 0.5
+        dist, res = (0.0, vec) if norm == 0 else _residual(
+            self.basis, [v / norm for v in vec], math.fsum
+        )
+        if norm == 0 or (dist < DOUBLE_DEPENDENT and norm > DOUBLE_ZERO):
+            return False
+        if not (dist > DOUBLE_INDEPENDENT and norm > DOUBLE_ZERO) and not self._precise(word):
+            return False
+        self.words.append(word)
+        if dist > 0:
+            self.basis.append([x / dist for x in res])
+        return True
+
+    def _precise(self, word: Word) -> bool:
+        span = _MpSpan(GENERIC_TOL, GENERIC_ZERO, _GENERIC_DPS)
+        for w in self.words:
+            span.try_add(self.at.precise(w))
+        return span.try_add(self.at.precise(word))
+
+
+def _generic_growth_at(
+    at: _GenericPoint, n: int, m: int, frame: Sequence[Word] | None = None
+) -> tuple[tuple[int, ...], tuple[Word, ...]]:
+    """Growth vector at a (random, assumed regular) point, and the words that realise it.
+
+    With ``frame`` given, only those words are evaluated (a cheap confirmation at
+    a second point); else new words are the brackets ``[X_i, Y]`` of the chosen
+    generators with the words chosen at the previous length.
+    """
+    span = _GenericSpan(at)
     growth: list[int] = []
-    newest: list[Word] = []
-    for i in range(1, sys.m + 1):
-        vec = _numeric_values(sys, i, subs)
-        if vec is None:
-            return None
-        if span.try_add(vec):
-            newest.append(i)
+    if frame is not None:
+        by_length: dict[int, list[Word]] = {}
+        for w in frame:
+            by_length.setdefault(word_length(w), []).append(w)
+        for s in range(1, max(by_length, default=0) + 1):
+            for w in by_length.get(s, []):
+                span.try_add(w)
+            growth.append(span.rank)
+        return tuple(growth), tuple(span.words)
+    newest: list[Word] = [i for i in range(1, m + 1) if span.try_add(i)]
     generators = list(newest)
     growth.append(span.rank)
-    while span.rank < sys.n:
+    while span.rank < n:
         candidates = [(g, w) for w in newest for g in generators]
         newest = []
         for w in candidates:
-            vec = _numeric_values(sys, w, subs)
-            if vec is None:
-                return None
-            if span.try_add(vec):
+            if span.try_add(w):
                 newest.append(w)
-                if span.rank == sys.n:
+                if span.rank == n:
                     break
         if not newest:
             break
         growth.append(span.rank)
-    return tuple(growth)
+    return tuple(growth), tuple(span.words)
 
 
 def generic_growth_vector(
@@ -282,17 +440,27 @@ def generic_growth_vector(
 ) -> tuple[int, ...]:
     """The growth vector at random points near ``point`` (the origin by default).
 
-    Evaluated at two pseudo-random points (fixed seed) in the box of half-width
-    :data:`GENERIC_PERTURBATION` around the point, with 212-bit floats; the
-    componentwise maximum is returned (each is a lower bound of the generic value
-    and equals it with probability one).
+    A pseudo-random exact point (fixed seed) in the box of half-width
+    :data:`GENERIC_PERTURBATION` around ``point`` is regular with probability one;
+    there the words chosen at length $s$ span $\\Delta^s$ as a module, so only
+    the brackets $[X_i, Y]$ with the words $Y$ chosen at the previous length are
+    needed.  The growth of the same words is confirmed at a second random point
+    and the componentwise maximum returned (each is a lower bound of the
+    generic value); if the two differ, the second point is analysed in full.
     """
-    p = sys.point(point) if point is not None else sys.origin()
-    results = []
-    for values in _random_points(p, 6):
-        g = _generic_growth_at(sys, values)
-        if g is not None:
-            results.append(g)
+    p = _normalise_point(sys, point)
+    results: list[tuple[int, ...]] = []
+    frame: tuple[Word, ...] | None = None
+    for values in _random_points(p, 8):
+        try:
+            at = _GenericPoint(sys, values)
+            growth, words = _generic_growth_at(at, sys.n, sys.m, frame)
+            if frame is not None and growth != results[0]:
+                growth, words = _generic_growth_at(at, sys.n, sys.m)
+        except _Undefined:
+            continue
+        results.append(growth)
+        frame = words
         if len(results) == 2:
             break
     if not results:
