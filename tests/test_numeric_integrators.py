@@ -176,3 +176,24 @@ def test_option_errors():
         integrate(HEIS, np.zeros(3), inputs, method="fixed", steps=7)
     with pytest.raises(OptionError):
         bracket_inputs(2, 1, 1, [0.1])
+
+
+def test_samples_across_segments_agree_between_engines():
+    """Three segments (constant, then sinusoids), samples on and between the boundaries."""
+    rng = np.random.default_rng(11)
+    batch = 3
+    durations = np.tile([0.7, 1.1, 0.5], (batch, 1))
+    omegas = np.tile([1.0, 2.5, 4.0], (batch, 1))
+    constant = rng.normal(size=(batch, 3, 2))
+    cos = rng.normal(size=(batch, 3, 2, 2))
+    sin = rng.normal(size=(batch, 3, 2, 2))
+    cos[:, 0] = sin[:, 0] = 0.0
+    inputs = HarmonicInputs(durations, omegas, constant, cos, sin)
+    x0 = rng.normal(size=(batch, 3))
+    times = np.array([0.0, 0.3, 0.7, 1.0, 1.8, 2.0, 2.3])
+    ref = integrate(HEIS, x0, inputs, engine="scipy", times=times, rtol=1e-13, atol=1e-15)
+    for method, engine in [("adaptive", "numba"), ("fixed", "numba"), ("fixed", "numpy")]:
+        sol = integrate(HEIS, x0, inputs, method=method, engine=engine, times=times,
+                        rtol=1e-12, atol=1e-14, steps=64)
+        np.testing.assert_allclose(sol.samples, ref.samples, atol=1e-10, err_msg=engine)
+        np.testing.assert_allclose(sol.final, ref.samples[:, -1], atol=1e-10)
