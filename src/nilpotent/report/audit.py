@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import random
+import re
 from collections.abc import Callable, Collection, Iterable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -41,6 +42,7 @@ from nilpotent.core.brackets import bracket
 from nilpotent.core.expressions import format_expression
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import OptionError
+from nilpotent.report.latexmath import strip_layout
 from nilpotent.report.paper import OMEGA, A, PaperContent, PrintedField, T, X, Y, read_paper
 
 __all__ = ["AUDIT_SCHEMA", "CHECKS", "Audit", "AuditEntry", "format_field", "run_audit"]
@@ -175,6 +177,21 @@ def format_field(comps: Sequence[sp.Expr], coords: Sequence[sp.Symbol]) -> str:
             terms.append(f"{sign}{text}*{name}")
     text = " + ".join(terms) or "0"
     return text.replace("+ -", "- ")
+
+
+def _printed(field: PrintedField) -> str:
+    """A field as printed in the paper: ``g_1 = <its LaTeX>``, whitespace normalised."""
+    name = ("\\hat g_" if field.name.startswith("ĝ") else "g_") + field.name[-1]
+    return f"{name} = " + re.sub(r"\s+", " ", field.latex).strip()
+
+
+def _printed_matrix(latex: str) -> str:
+    """The printed matrix's LaTeX cells without layout commands: ``[a, b, ...; ...]``."""
+    rows = []
+    for row in latex.split("\\\\"):
+        cells = [re.sub(r"\s+", " ", strip_layout(c)).strip() for c in row.split("&")]
+        rows.append(", ".join(cells))
+    return "[" + "; ".join(rows) + "]"
 
 
 def _fmt_vec(values: Sequence[sp.Expr]) -> str:
@@ -414,7 +431,7 @@ def _check_section4_fields(paper: PaperContent, c: _Computed) -> Iterable[AuditE
             printed.section,
             f"Solving the no-slip (Pfaff) constraints for q̇ with body-velocity inputs gives "
             f"g{k + 1} as printed (coordinates x, y, θ, φ1, φ2, φ3 = x1..x6).",
-            format_field(g, X),
+            _printed(printed),
             format_field(model, X),
             ok,
             why,
@@ -461,7 +478,7 @@ def _check_vf(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
             printed.section,
             f"eq. vf: g{k + 1} is the Section 4 field with the rotation R_θ removed "
             "(ẇ = v, φ̇ = A(φ)v with the same A(φ)).",
-            format_field(printed.components, X),
+            _printed(printed),
             format_field(removed, X),
             ok,
             why,
@@ -487,7 +504,7 @@ def _check_vf(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
         paper.vf_fields[0].section,
         "eq. vf describes the same robot as Section 4's g1, g2, g3 (the simplified form is "
         "used 'for the sake of simplicity').",
-        "vf obtained by the transformation v = A(φ)⁻¹φ̇",
+        paper.vf_text.text,
         "span{[gi,gj]}: "
         + "; ".join(f"{n}: rank {r[0]}, with its own brackets {r[1]}" for n, r in ranks.items()),
         same,
@@ -519,7 +536,7 @@ def _check_liebrackets(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry
             f"sec4-bracket-g{k}",
             printed.section,
             f"eq. liebrackets: g{k} = [g{i},g{j}] at 0, computed from eq. vf.",
-            format_field(printed.components, X),
+            _printed(printed),
             format_field(ours, X),
             ok,
             why,
@@ -635,7 +652,7 @@ def _check_privileged(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]
         "5",
         "The linear map y = M x of Section 5 satisfies ∂/∂y_i|_0 = g_i|_0 for i = 1..6 "
         "(g4, g5, g6 the brackets of eq. liebrackets).",
-        "M = " + _matrix_text(m),
+        "M = " + _printed_matrix(paper.privileged_matrix_latex),
         "M must be [g1(0) … g6(0)]⁻¹ = " + _matrix_text(sp.simplify(correct)),
         bool(ok_any),
         ("holds with " + ok_any[0])
@@ -742,7 +759,7 @@ def _check_approximation(paper: PaperContent, c: _Computed) -> Iterable[AuditEnt
             printed.section,
             f"ĝ{k + 1} (Section 6) is the nilpotent approximation of g{k + 1} at 0 in the "
             "coordinates y = M x of Section 5.",
-            format_field(printed.components, Y),
+            _printed(printed),
             format_field(trunc, Y),
             ok,
             why,
@@ -786,10 +803,7 @@ def _check_approximation(paper: PaperContent, c: _Computed) -> Iterable[AuditEnt
         "sec6-approx-family",
         "6",
         "(ĝ1, ĝ2, ĝ3) is a first-order (nilpotent) approximation of (g1, g2, g3) at 0.",
-        "; ".join(
-            f"ĝ{k + 1} = {format_field(f.components, Y)}"
-            for k, f in enumerate(paper.approximation_y)
-        ),
+        "; ".join(_printed(f) for f in paper.approximation_y),
         "approximate(): "
         + "; ".join(f"X̂{k + 1} = {format_field(f, names)}" for k, f in enumerate(ours_y)),
         ok,
@@ -800,6 +814,39 @@ def _check_approximation(paper: PaperContent, c: _Computed) -> Iterable[AuditEnt
         )
         if ok
         else "no homogeneous change of coordinates maps approximate()'s fields to the printed ones",
+    )
+
+
+def _is_form(expr: sp.Expr, degree: int) -> bool:
+    """Whether ``expr`` is a homogeneous polynomial of ``degree`` in y1, y2, y3 only."""
+    e = sp.expand(sp.S(expr))
+    if e == 0:
+        return True
+    if e.free_symbols - set(Y[:3]):
+        return False
+    poly = sp.Poly(e, *Y[:3])
+    return all(sum(m) == degree for m in poly.monoms())
+
+
+def _check_homogeneous_form(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
+    w = paper.weights
+    bad = [
+        f"{f.name}: {_fmt(v)} along ∂y{j + 1}"
+        for f in paper.approximation_y
+        for j, v in enumerate(f.components)
+        if not _is_form(v, w[j] - 1)
+    ]
+    yield _entry(
+        "sec6-homogeneous-form",
+        paper.homogeneous_text.section,
+        "In (ĝ1, ĝ2, ĝ3) the ∂y1..∂y3 components are constants and the ∂y4..∂y6 components "
+        "are linear forms in y1, y2, y3 (homogeneous of degree −1).",
+        paper.homogeneous_text.text,
+        "components of the printed ĝ: " + ("all of that form" if not bad else "; ".join(bad)),
+        not bad,
+        "checked on the printed Section 6 fields (weights (1,1,1,2,2,2))"
+        if not bad
+        else "some components are not of weighted degree w_j − 1",
     )
 
 
@@ -852,7 +899,7 @@ def _check_hat_brackets(paper: PaperContent, c: _Computed) -> Iterable[AuditEntr
             printed.section,
             f"ĝ{k} = [ĝ{i},ĝ{j}] (Section 4's naming) equals "
             f"{format_field(printed.components, Y)}.",
-            format_field(printed.components, Y),
+            _printed(printed),
             format_field(ours, Y),
             ok,
             why,
@@ -924,7 +971,7 @@ def _check_approximation_x(paper: PaperContent, c: _Computed) -> Iterable[AuditE
             f"sec7-approx-x-g{k + 1}",
             printed.section,
             f"{name} written in the coordinates x1..x6 (Section 7).",
-            format_field(printed.components, X),
+            _printed(printed),
             format_field(ours_x[k], X),
             ok,
             why,
@@ -1006,7 +1053,7 @@ def _check_inputs(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
                 f"sec7-input-{inp.name.replace('_', '')}",
                 "7",
                 f"{inp.name} is a periodic bracket input.",
-                inp.latex,
+                f"{inp.name}(t) = {inp.latex}",
                 "not of the form (−Aω sin ωt, Aω cos ωt) on two inputs",
                 False,
                 "unrecognised input",
@@ -1037,7 +1084,7 @@ def _check_inputs(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
             f"The periodic input {inp.name} (listed for ĝ{target} = "
             f"[ĝ{target_pair[0]},ĝ{target_pair[1]}], 'respectively'; label {inp.label}) "
             f"realises ĝ{target}.",
-            inp.latex,
+            f"{inp.name}(t) = {inp.latex}",
             f"realises [g{i},g{j}] = ĝ{realised} (Section 7's naming)",
             ok,
             why,
@@ -1055,6 +1102,7 @@ CHECKS: tuple[tuple[str, Check], ...] = (
     ("privileged coordinates", _check_privileged),
     ("weights", _check_weights),
     ("nilpotent approximation", _check_approximation),
+    ("homogeneous form", _check_homogeneous_form),
     ("nilpotency step", _check_step),
     ("brackets of the approximation", _check_hat_brackets),
     ("bracket names", _check_labels),

@@ -157,6 +157,8 @@ class PaperContent:
     motion_claims: tuple[MotionClaim, ...]
     brackets_coincide_text: TextClaim
     privileged_text: TextClaim
+    vf_text: TextClaim
+    homogeneous_text: TextClaim
 
 
 @cache
@@ -426,6 +428,10 @@ def read_paper(source: str | None = None) -> PaperContent:
     step_text = _sentence(src, r"nilpotent Lie algebra of step", "the step claim")
     coincide = _sentence(src, r"Lie bracket motions at 0 correspond exactly", "Section 7 claim")
     privileged = _sentence(src, r"are clearly the privileged ones", "Section 5 claim")
+    vf_text = _sentence(src, r"We shall use this form", "the use of eq. (vf)")
+    homogeneous = _sentence(
+        src, r"coordinate functions of \$g_1\^\{\(-1\)\}", "Section 6 form of the g^(-1)"
+    )
 
     return PaperContent(
         source_sha256=sha,
@@ -451,4 +457,6 @@ def read_paper(source: str | None = None) -> PaperContent:
         motion_claims=_motion_claims(src),
         brackets_coincide_text=coincide,
         privileged_text=privileged,
+        vf_text=vf_text,
+        homogeneous_text=homogeneous,
     )
