@@ -197,3 +197,17 @@ def test_samples_across_segments_agree_between_engines():
                         rtol=1e-12, atol=1e-14, steps=64)
         np.testing.assert_allclose(sol.samples, ref.samples, atol=1e-10, err_msg=engine)
         np.testing.assert_allclose(sol.final, ref.samples[:, -1], atol=1e-10)
+
+
+@pytest.mark.parametrize(("method", "engine"),
+                         [("adaptive", "numba"), ("fixed", "numba"), ("adaptive", "scipy")])
+def test_a_singular_field_gives_a_status_not_an_exception(method, engine):
+    """dx/dt = u/x from x = 0: the field is infinite at the start."""
+    x = sp.Symbol("x")
+    compiled = compile_fields((x,), [(1 / x,)], name="singular")
+    inputs = _piecewise([[1.0]], [1.0])
+    sol = integrate(compiled, [[0.0], [1.0]], inputs, method=method, engine=engine,
+                    max_steps=2000, steps=256)
+    assert not sol.ok[0]
+    # from x = 1: x² = 1 + 2t, so x(1) = sqrt(3)
+    assert sol.ok[1] and abs(sol.final[1, 0] - math.sqrt(3)) < 1e-8

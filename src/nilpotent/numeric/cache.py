@@ -24,7 +24,7 @@ from pathlib import Path
 from types import ModuleType
 
 #: Bumped whenever the code generators change what they write.
-GENERATOR_VERSION = "1"
+GENERATOR_VERSION = "2"
 
 
 def cache_dir() -> Path:

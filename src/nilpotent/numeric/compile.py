@@ -48,6 +48,11 @@ BACKENDS = ("auto", "numpy", "numba", "jax")
 
 _SMALL_INT = 2**31
 
+# numpy's error model: a division by zero gives inf/nan (reported as a non-finite
+# state by the integrators) instead of raising inside a parallel kernel.
+_NJIT = '@njit(cache=True, error_model="numpy")'
+_NJIT_PARALLEL = '@njit(cache=True, parallel=True, error_model="numpy")'
+
 
 def numba_available() -> bool:
     """Whether numba can be imported."""
@@ -396,13 +401,13 @@ def _numba_source(prep: _Prepared, name: str) -> str:
     ]
     body = [f"    q{k} = x[{k}]" for k in range(prep.n)]
     body += [f"    {s} = {printer.doprint(e)}" for s, e in prep.replacements]
-    lines += ["@njit(cache=True)", "def fields(x, F):"]
+    lines += [_NJIT, "def fields(x, F):"]
     lines += body
     for i in range(prep.m):
         for j in range(prep.n):
             e = prep.reduced[i * prep.n + j]
             lines.append(f"    F[{j}, {i}] = {printer.doprint(e) if e != 0 else '0.0'}")
-    lines += ["", "", "@njit(cache=True)", "def rhs(x, u, out):"]
+    lines += ["", "", _NJIT, "def rhs(x, u, out):"]
     lines += body
     for j in range(prep.n):
         terms = _rhs_terms(prep, j, printer, "u[{i}]")
@@ -410,13 +415,13 @@ def _numba_source(prep: _Prepared, name: str) -> str:
     lines += [
         "",
         "",
-        "@njit(cache=True, parallel=True)",
+        _NJIT_PARALLEL,
         "def fields_batch(x, F):",
         "    for b in prange(x.shape[0]):",
         "        fields(x[b], F[b])",
         "",
         "",
-        "@njit(cache=True, parallel=True)",
+        _NJIT_PARALLEL,
         "def rhs_batch(x, u, out):",
         "    for b in prange(x.shape[0]):",
         "        rhs(x[b], u[b], out[b])",

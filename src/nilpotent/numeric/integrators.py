@@ -513,8 +513,12 @@ def solve_function_input(
         inside = ts[(ts >= a) & ((ts < b) | (last & (ts <= b)))]
         teval = np.unique(np.concatenate([inside, [b]]))
         try:
-            sol = solve_ivp(fun, (a, b), x, method="DOP853", rtol=rtol, atol=atol,
-                            t_eval=teval, events=escape)
+            with np.errstate(all="ignore"):
+                if not np.all(np.isfinite(fun(a, x))):
+                    status = Status.NON_FINITE
+                    break
+                sol = solve_ivp(fun, (a, b), x, method="DOP853", rtol=rtol, atol=atol,
+                                t_eval=teval, events=escape)
         except _TooManySteps:
             status = Status.MAX_STEPS
             break

@@ -38,7 +38,7 @@ def _combo(coeffs: tuple[float, ...], arr: str = "K") -> str:
 
 def _step_source(t: ButcherTableau) -> str:
     lines = [
-        "@njit(cache=True)",
+        '@njit(cache=True, error_model="numpy")',
         "def _step(tl, x, h, w, a, bc, bs, K, xs, u, xnew):",
         "    # K[0] holds f(tl, x) on entry; fills K[1..S-1] and xnew.",
     ]
@@ -50,7 +50,7 @@ def _step_source(t: ButcherTableau) -> str:
     lines.append(f"        xnew[k] = x[k] + h * ({_combo(t.b)})")
     lines += ["", ""]
     lines += [
-        "@njit(cache=True)",
+        '@njit(cache=True, error_model="numpy")',
         "def _error_norm(h, x, xnew, K, rtol, atol):",
         "    # K[S] holds f(tl + h, xnew).",
         "    e5sq = 0.0",
@@ -71,7 +71,7 @@ def _step_source(t: ButcherTableau) -> str:
 
 
 _DRIVER = '''
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _inputs(tl, w, a, bc, bs, u):
     for i in range(M):
         u[i] = a[i]
@@ -88,13 +88,13 @@ def _inputs(tl, w, a, bc, bs, u):
                 ck, sk = ck * c1 - sk * s1, sk * c1 + ck * s1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _f(tl, x, w, a, bc, bs, u, out):
     _inputs(tl, w, a, bc, bs, u)
     rhs(x, u, out)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _rms_scaled(v, x, rtol, atol):
     acc = 0.0
     for k in range(N):
@@ -103,7 +103,7 @@ def _rms_scaled(v, x, rtol, atol):
     return math.sqrt(acc / N)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _initial_step(x, f0, dur, w, a, bc, bs, rtol, atol, xs, f1, u):
     d0 = _rms_scaled(x, x, rtol, atol)
     d1 = _rms_scaled(f0, x, rtol, atol)
@@ -125,7 +125,7 @@ def _initial_step(x, f0, dur, w, a, bc, bs, rtol, atol, xs, f1, u):
     return min(100.0 * h0, h1, dur)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _bad_state(x, bound):
     for k in range(N):
         v = x[k]
@@ -136,7 +136,7 @@ def _bad_state(x, bound):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _integrate_one(x0, dur, om, a, bc, bs, ts, adaptive, nfixed, rtol, atol,
                    max_steps, min_step, bound, xf, samples, info):
     x = x0.copy()
@@ -165,6 +165,9 @@ def _integrate_one(x0, dur, om, a, bc, bs, ts, adaptive, nfixed, rtol, atol,
         ss = bs[s]
         tl = 0.0
         _f(0.0, x, w, aa, cc, ss, u, K[0])
+        if _bad_state(K[0], INF) != 0:
+            status = 4
+            break
         if adaptive:
             h = _initial_step(x, K[0], d, w, aa, cc, ss, rtol, atol, xs, K[1], u)
         else:
@@ -226,7 +229,10 @@ def _integrate_one(x0, dur, om, a, bc, bs, ts, adaptive, nfixed, rtol, atol,
                     else:
                         rejected += 1
                         just_rejected = True
-                        h = hs * max(MIN_FACTOR, SAFETY * err ** ERR_EXP)
+                        if math.isfinite(err):
+                            h = hs * max(MIN_FACTOR, SAFETY * err ** ERR_EXP)
+                        else:
+                            h = hs * MIN_FACTOR
                         continue
                 else:
                     for _ in range(npiece):
@@ -265,7 +271,7 @@ def _integrate_one(x0, dur, om, a, bc, bs, ts, adaptive, nfixed, rtol, atol,
     info[3] = errsum
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, error_model="numpy")
 def integrate_batch(x0, durations, omegas, constant, cos, sin, ts, adaptive, nfixed,
                     rtol, atol, max_steps, min_step, bound, xf, samples, info):
     for b in prange(x0.shape[0]):
@@ -288,6 +294,7 @@ def _constants(t: ButcherTableau) -> str:
             "SAFETY = 0.9",
             "MIN_FACTOR = 0.2",
             "MAX_FACTOR = 10.0",
+            "INF = math.inf",
             "",
             "",
         ]
