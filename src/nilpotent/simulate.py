@@ -369,12 +369,17 @@ def simulate(
 ) -> Trajectory:
     """Simulate ``dx/dt = Σ u_i(t) X_i(x)`` from ``x0`` (default: the origin).
 
+    ``x0`` is a sequence of numbers or, for a ``ControlSystem``, a mapping
+    ``{coordinate name: number}`` (missing names are 0).
+
     ``samples`` equally spaced times from 0 to the signal's duration are
     recorded.  A :class:`FunctionSignal` is integrated with ``solve_ivp``
     (``method``/``engine`` must then be left at their defaults or be
     ``"adaptive"``/``"scipy"``).
     """
     compiled = _as_compiled(sys)
+    if isinstance(x0, Mapping) and isinstance(sys, ControlSystem):
+        x0 = sys.point(x0)
     if signal.m != compiled.m:
         raise OptionError(f"the signal has {signal.m} inputs, the system {compiled.m} fields")
     start = _float_point(compiled, x0)
