@@ -138,3 +138,14 @@ def test_jax_source_is_valid_python_using_jax_numpy():
     names = {f.name for f in tree.body if isinstance(f, ast.FunctionDef)}
     assert names == {"fields", "rhs"}
     assert "jax.numpy.sin" in text and "math." not in text and "numpy.sin" in text
+
+
+def test_compiled_system_pickles_without_its_modules():
+    import pickle
+
+    compiled = compile_system(get_model("unicycle"), backend="numpy")
+    compiled.field_values([0.0, 0.0, 0.0])  # loads the generated module
+    again = pickle.loads(pickle.dumps(compiled))
+    assert again.key == compiled.key and again.fields == compiled.fields
+    np.testing.assert_array_equal(again.field_values([[1.0, 2.0, 0.5]]),
+                                  compiled.field_values([[1.0, 2.0, 0.5]]))

@@ -158,6 +158,14 @@ class CompiledSystem:
     backend: str = "auto"
     _memo: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # picklable (e.g. for Dask workers): the loaded modules are not sent,
+        # the receiving process imports them from the cache again
+        return (
+            CompiledSystem,
+            (self.name, self.coordinate_names, self.fields, self.key, self.backend),
+        )
+
     @property
     def n(self) -> int:
         return len(self.coordinate_names)
