@@ -62,6 +62,7 @@ AGREES = [
     "sec7-motions-coincide",
     "sec7-approx-x-g3",
     "sec7-approx-x-g4",
+    "sec6-homogeneous-form",
     "sec5-component-g1-x1",
 ]
 DIFFERS = [
@@ -79,6 +80,7 @@ DIFFERS = [
     "sec7-motions-coincide-printed",
     "sec6-bracket-g5",
     "sec6-bracket-g6",
+    "sec6-first-order",
 ]
 
 
@@ -132,7 +134,7 @@ def _latex(v: sp.Expr) -> str:
     return sp.latex(sp.nsimplify(v)).replace(r"\left(", "(").replace(r"\right)", ")")
 
 
-def test_the_correct_matrix_is_accepted() -> None:
+def _correct_matrix_source() -> str:
     # G(0) by hand: g1(0), g2(0), g3(0), [g1,g2](0), [g2,g3](0), [g1,g3](0) (Section 4 names)
     half = sp.Rational(1, 2)
     cols = [
@@ -148,8 +150,38 @@ def test_the_correct_matrix_is_accepted() -> None:
     src = paper_source()
     start = src.index(r"\begin{pmatrix}" + "\n\t" + r"\phantom{-}1")
     end = src.index(r"\end{pmatrix}", start)
-    src = src[:start] + r"\begin{pmatrix}\phantom{-}" + body + "\n" + src[end:]
-    result = _audit_of(src, "privileged coordinates")
+    return src[:start] + r"\begin{pmatrix}\phantom{-}" + body + "\n" + src[end:]
+
+
+def test_the_correct_matrix_is_accepted() -> None:
+    result = _audit_of(_correct_matrix_source(), "privileged coordinates")
+    for entry in result.entries:
+        assert entry.verdict == "agrees", entry
+
+
+def test_the_correct_approximation_is_accepted() -> None:
+    # The weighted truncation of eq. vf in the coordinates y = G(0)^{-1} x above, derived
+    # separately (sympy series of M g(M^{-1} y) in t with y_k -> t^{w_k} y_k):
+    src = _correct_matrix_source()
+    old1 = (
+        r"\hat g_1&=  \partial_{y_1}-\frac{y_2}{2}\partial_{y_4}+(-\frac{y_2}{2}-y_3)"
+        r"\partial_{y_5}-\frac{y_1}{2}\partial_{y_6}"
+    )
+    new1 = (
+        r"\hat g_1&=  \partial_{y_1}-\frac{y_2}{2}\partial_{y_4}-\frac{y_1}{4}\partial_{y_5}"
+        r"+(-\frac{y_2}{4}-y_3)\partial_{y_6}"
+    )
+    old2 = (
+        r"\hat g_2&= \partial_{y_2}+\frac{y_1}{2}\partial_{y_4}-\frac{y_1}{2}\partial_{y_5}"
+        r"+(\frac{y_2}{2}-y_3)\partial_{y_6}"
+    )
+    new2 = (
+        r"\hat g_2&= \partial_{y_2}+\frac{y_1}{2}\partial_{y_4}+(\frac{y_2}{4}-y_3)"
+        r"\partial_{y_5}-\frac{y_1}{4}\partial_{y_6}"
+    )
+    assert old1 in src and old2 in src
+    src = src.replace(old1, new1).replace(old2, new2)
+    result = _audit_of(src, "nilpotent approximation", "first order")
     for entry in result.entries:
         assert entry.verdict == "agrees", entry
 
@@ -172,3 +204,12 @@ def test_unknown_group_is_refused() -> None:
 def test_every_group_has_a_name() -> None:
     names = [n for n, _ in CHECKS]
     assert len(names) == len(set(names))
+
+
+def test_a_family_with_wrong_weight_one_part_is_not_an_approximation() -> None:
+    src = paper_source().replace(
+        r"\hat g_3 &=\partial_{y_3}.", r"\hat g_3 &=\partial_{y_3}+\partial_{y_1}."
+    )
+    assert src != paper_source()
+    result = _audit_of(src, "nilpotent approximation")
+    assert result.entry("sec6-approx-family").verdict == "differs"

@@ -689,22 +689,27 @@ def _check_privileged(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]
     )
 
 
-def _linear_order(row: sp.Matrix, c: _Computed) -> int:
-    """Non-holonomic order at 0 of the linear function ``row · x`` for eq. vf (1, 2, or 3)."""
-    g0 = [_at_origin(f, X) for f in c.vf.specialized_fields]
-    if any(not _vanishes(sum(row[j] * g[j] for j in range(6))) for g in g0):
-        return 1
-    # X_i X_j f(0) for linear f = (D X_j · X_i)(0) · row; for f killed by Δ¹(0) this is the
-    # bracket part up to symmetric terms; compute it directly.
-    f = sum(row[j] * X[j] for j in range(6))
-    fields = c.vf.specialized_fields
-    for a in fields:
-        for b in fields:
-            inner = sum(b[j] * sp.diff(f, X[j]) for j in range(6))
-            value = sum(a[j] * sp.diff(inner, X[j]) for j in range(6))
-            if not _vanishes(sp.S(value).subs({x: 0 for x in X})):
-                return 2
-    return 3
+def _linear_order(row: sp.Matrix, c: _Computed) -> float:
+    """Non-holonomic order at 0 of the linear function ``row · x`` for eq. vf."""
+    from nilpotent.core.orders import function_order
+
+    return function_order(c.vf, sum(row[j] * X[j] for j in range(6)), None, 4)
+
+
+def _field_order(c: _Computed, field: Sequence[sp.Expr]) -> float:
+    """Non-holonomic order at 0 of a vector field on eq. vf's space (``MATH.md`` §3).
+
+    In privileged coordinates ``z`` (approximate()'s), ``ord(Z) = min_j ord(Z z_j) − w_j``.
+    """
+    from nilpotent.core.orders import function_order
+
+    z = c.approximation.coordinates.forward
+    weights = c.vf_filtration.weights
+    out = math.inf
+    for zj, wj in zip(z, weights, strict=True):
+        f = sp.expand(sum(sp.S(field[k]) * sp.diff(zj, X[k]) for k in range(6)))
+        out = min(out, function_order(c.vf, f, None, wj + 2) - wj)
+    return out
 
 
 def _matrix_text(m: sp.Matrix) -> str:
@@ -757,60 +762,61 @@ def _check_approximation(paper: PaperContent, c: _Computed) -> Iterable[AuditEnt
         yield _entry(
             f"sec6-approx-g{k + 1}",
             printed.section,
-            f"ĝ{k + 1} (Section 6) is the nilpotent approximation of g{k + 1} at 0 in the "
-            "coordinates y = M x of Section 5.",
+            f"ĝ{k + 1} (Section 6) is g{k + 1}^(−1), the part of weighted degree −1 of g{k + 1} "
+            "written in the coordinates y = M x of Section 5.",
             _printed(printed),
             format_field(trunc, Y),
             ok,
             why,
         )
     # Is the printed family a nilpotent approximation in *some* privileged coordinates?
-    # Ours is in linear adapted coordinates z; the printed one, in y, differs from ours by a
-    # homogeneous change y_j = z_j + q_j(z1, z2, z3) (j of weight 2) iff the difference of
-    # the weight-2 components is the gradient of a quadratic q_j.
-    ours_in_y = [[sp.S(v).subs(dict(zip(names, Y, strict=True))) for v in f] for f in ours_y]
-    same_first = all(
-        _same(printed.components[:3], ours_in_y[k][:3])
-        for k, printed in enumerate(paper.approximation_y)
+    # Both families have weight-1 components e_i, weight-2 components linear in y1..y3.
+    # Nilpotent approximations in two privileged coordinate systems differ by a graded change
+    # y'_{4..6} = L y_{4..6} + q(y1, y2, y3) (q quadratic), under which the weight-2 parts
+    # become L·(ours) + grad q and the (constant) brackets L·(ours).  So L is fixed by the
+    # brackets, and the printed family is such an approximation iff printed − L·ours is, in
+    # each weight-2 component, the gradient of a quadratic (symmetric Jacobian).
+    sub = dict(zip(names, Y, strict=True))
+    ours_in_y = [[sp.S(v).subs(sub) for v in f] for f in ours_y]
+    printed_y = [f.components for f in paper.approximation_y]
+    pairs = ((1, 2), (1, 3), (2, 3))
+
+    def bracket_matrix(fields: Sequence[Sequence[sp.Expr]]) -> sp.Matrix:
+        cols = [_bracket_y(fields[i - 1], fields[j - 1]) for i, j in pairs]
+        return sp.Matrix([[sp.expand(col[r]) for col in cols] for r in range(3, 6)])
+
+    b_printed, b_ours = bracket_matrix(printed_y), bracket_matrix(ours_in_y)
+    ok = (
+        all(_same(printed_y[k][:3], ours_in_y[k][:3]) for k in range(3))
+        and not (b_printed.free_symbols | b_ours.free_symbols)
+        and b_ours.det() != 0
+        and b_printed.det() != 0
     )
-    gradient = same_first
-    diffs = []
-    for j in range(3, 6):
-        d = [sp.expand(paper.approximation_y[k].components[j] - ours_in_y[k][j]) for k in range(3)]
-        diffs.append(d)
-        for a in range(3):
-            for b in range(3):
-                if not _vanishes(sp.diff(d[a], Y[b]) - sp.diff(d[b], Y[a])):
-                    gradient = False
-    brackets_printed = {
-        (i, j): _bracket_y(
-            paper.approximation_y[i - 1].components, paper.approximation_y[j - 1].components
+    change = sp.zeros(3, 3)
+    if ok:
+        change = sp.simplify(b_printed * b_ours.inv())
+        rest = [
+            sp.Matrix(printed_y[k][3:]) - change * sp.Matrix(ours_in_y[k][3:]) for k in range(3)
+        ]
+        ok = all(
+            _vanishes(sp.diff(rest[a][r], Y[b]) - sp.diff(rest[b][r], Y[a]))
+            for r in range(3)
+            for a in range(3)
+            for b in range(3)
         )
-        for i, j in ((1, 2), (1, 3), (2, 3))
-    }
-    ours_brackets = {
-        (i, j): bracket(ours_y[i - 1], ours_y[j - 1], names) for i, j in ((1, 2), (1, 3), (2, 3))
-    }
-    same_brackets = all(
-        _same(
-            brackets_printed[p],
-            [sp.S(v).subs(dict(zip(names, Y, strict=True))) for v in ours_brackets[p]],
-        )
-        for p in brackets_printed
-    )
-    ok = gradient and same_brackets
     yield _entry(
         "sec6-approx-family",
         "6",
-        "(ĝ1, ĝ2, ĝ3) is a first-order (nilpotent) approximation of (g1, g2, g3) at 0.",
+        "(ĝ1, ĝ2, ĝ3) is a nilpotent approximation of (g1, g2, g3) at 0 in some privileged "
+        "coordinates (whatever y is).",
         "; ".join(_printed(f) for f in paper.approximation_y),
         "approximate(): "
         + "; ".join(f"X̂{k + 1} = {format_field(f, names)}" for k, f in enumerate(ours_y)),
         ok,
         (
-            "the printed fields equal approximate()'s (linear adapted coordinates) after a "
-            "homogeneous change of the weight-2 coordinates by quadratics in y1, y2, y3: a "
-            "nilpotent approximation in other privileged coordinates"
+            "the printed fields equal approximate()'s after the graded change of coordinates "
+            f"(y4, y5, y6) → {_matrix_text(change)}·(y4, y5, y6) + quadratics in y1, y2, y3: "
+            "a nilpotent approximation, in other privileged coordinates"
         )
         if ok
         else "no homogeneous change of coordinates maps approximate()'s fields to the printed ones",
@@ -847,6 +853,43 @@ def _check_homogeneous_form(paper: PaperContent, c: _Computed) -> Iterable[Audit
         "checked on the printed Section 6 fields (weights (1,1,1,2,2,2))"
         if not bad
         else "some components are not of weighted degree w_j − 1",
+    )
+
+
+def _check_first_order(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
+    """Read in the paper's y = M x, is the printed ĝ a first-order approximation of vf?"""
+    m = sp.Matrix(paper.privileged_matrix)
+    forward = dict(zip(Y, list(m * sp.Matrix(X)), strict=True))
+    hat_x = _push([f.components for f in paper.approximation_y], m.inv(), Y, forward)
+    fields = c.vf.specialized_fields
+    printed = [
+        _field_order(c, [g - h for g, h in zip(fields[i], hat_x[i], strict=True)]) for i in range(3)
+    ]
+    ours = [
+        _field_order(
+            c, [g - h for g, h in zip(fields[i], c.approximation.fields_x[i], strict=True)]
+        )
+        for i in range(3)
+    ]
+    ok = all(o >= 0 for o in printed)
+    yield _entry(
+        "sec6-first-order",
+        paper.step_text.section,
+        "Read in the coordinates y = M x of Section 5, the printed (ĝ1, ĝ2, ĝ3) is a first-order "
+        "approximation of (g1, g2, g3) at 0: every gi − ĝi has order ≥ 0.",
+        paper.step_text.text,
+        "ord_0(gi − ĝi) = "
+        + ", ".join(str(o) for o in printed)
+        + "; for approximate()'s X̂i: "
+        + ", ".join(str(o) for o in ours),
+        ok,
+        "orders computed in approximate()'s privileged coordinates (MATH.md §3)"
+        + (
+            ""
+            if ok
+            else ": the printed fields, read in the paper's y, are not a first-order "
+            "approximation (the remainders are of negative order)"
+        ),
     )
 
 
@@ -1103,6 +1146,7 @@ CHECKS: tuple[tuple[str, Check], ...] = (
     ("weights", _check_weights),
     ("nilpotent approximation", _check_approximation),
     ("homogeneous form", _check_homogeneous_form),
+    ("first order", _check_first_order),
     ("nilpotency step", _check_step),
     ("brackets of the approximation", _check_hat_brackets),
     ("bracket names", _check_labels),
