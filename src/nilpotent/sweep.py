@@ -884,7 +884,12 @@ def sweep(
                 )
                 client = distributed.Client(cluster)
             else:
-                client = distributed.Client(dask)
+                try:
+                    client = distributed.Client(dask)
+                except (OSError, TimeoutError, ValueError) as exc:
+                    raise OptionError(
+                        f"cannot reach the Dask scheduler at {dask!r}: {exc}"
+                    ) from None
             own_client = True
         else:
             client = dask
