@@ -35,6 +35,8 @@ def main() -> None:
     for fit in result.fits():
         for w, slope in fit["slopes"].items():
             print(f"weight {w}: error ~ A^{slope:.2f} (expected A^{fit['expected_slopes'][w]})")
+    fig, _ = result.plot()
+    fig.savefig(out / "sweep.png", dpi=100)
     result.to_csv(out / "sweep.csv")
     (out / "sweep.json").write_text(json.dumps(result.to_json(), indent=1))
     print(f"rows: {out / 'sweep.csv'}")

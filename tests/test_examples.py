@@ -19,7 +19,7 @@ EXPECTED: dict[str, tuple[tuple[str, ...], str]] = {
     "03_bracket_motion.py": (("bracket_motion.png",), "end-point difference"),
     "04_scaling.py": (("scaling.png",), "expected 3"),
     "05_plan.py": (("plan.json",), "converged True"),
-    "06_sweep.py": (("sweep.csv", "sweep.json"), "blow-ups: 0"),
+    "06_sweep.py": (("sweep.csv", "sweep.json", "sweep.png"), "blow-ups: 0"),
 }
 #: Scripts that may compile numba kernels or iterate a planner (tens of seconds cold).
 SLOW = {"05_plan.py", "06_sweep.py"}

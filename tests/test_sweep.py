@@ -278,6 +278,28 @@ def test_cli_json_and_csv(sweep_cli, tmp_path):
         assert len(list(csv.DictReader(handle))) == 4
 
 
+def test_plot_draws_every_group_and_fit():
+    r = sweep(get_model("trident-snake"), (1, 2), AMPS, **FAST)
+    _, ax = r.plot()
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "weight 1" in labels and "weight 2" in labels
+    assert sum(lab.startswith("slope") for lab in labels) == 2
+    _, ax2 = r.plot(which="endpoint")
+    assert ax2 is not ax
+    with pytest.raises(OptionError):
+        r.plot(which="sideways")
+
+
+def test_cli_plot(sweep_cli, tmp_path):
+    fig = tmp_path / "s.png"
+    status, stdout, _ = sweep_cli("sweep", "unicycle", "--bracket", "1,2", "--amplitudes",
+                                  "0.02,0.04", "--plot", str(fig))
+    assert status == 0 and fig.stat().st_size > 0 and "figure written" in stdout
+    status, _, _ = sweep_cli("sweep", "unicycle", "--bracket", "1,2", "--plot",
+                             str(tmp_path / "s.nope"))
+    assert status == 2
+
+
 def test_cli_table(sweep_cli):
     status, stdout, _ = sweep_cli("sweep", "heisenberg", "--bracket", "1,2", "--amplitudes",
                                   "0.1,0.2", "--samples", "2", "--radius", "0.1")

@@ -373,6 +373,51 @@ class SweepResult:
             if self.wall_time > 0 else None,
         }
 
+    # --- figure ----------------------------------------------------------------------
+    def plot(self, ax: Any = None, *, which: str = "along") -> tuple[Any, Any]:
+        """Log–log scatter of the errors against the amplitude, one colour per weight group.
+
+        ``which``: ``"along"`` (errors along the way) or ``"endpoint"``.  The
+        fitted line of each (parameter set, bracket, weight) is drawn over the
+        successful samples above the noise floor.  Built without pyplot;
+        returns ``(figure, axes)``.
+        """
+        if which not in ("along", "endpoint"):
+            raise OptionError(f"which must be 'along' or 'endpoint', got {which!r}")
+        if ax is None:
+            from matplotlib.figure import Figure
+
+            fig = Figure(figsize=(6.4, 4.4), layout="constrained")
+            ax = fig.add_subplot(1, 1, 1)
+        else:
+            fig = ax.figure
+        errors = self.along_by_weight if which == "along" else self.endpoint_by_weight
+        key = "slopes" if which == "along" else "endpoint_slopes"
+        fits = {(tuple(f["parameters"].items()), tuple(f["bracket"])): f for f in self.fits()}
+        for w in self.groups:
+            err = errors[w]
+            keep = self.ok & np.isfinite(err) & (err > self.floor)
+            (dots,) = ax.loglog(self.amplitude[keep], err[keep], ".", alpha=0.5,
+                                label=f"weight {w}")
+            for k, pset in enumerate(self.parameter_sets):
+                for br in self.parameters.brackets:
+                    fit = fits.get((tuple(pset.items()), br))
+                    slope = None if fit is None else fit[key].get(str(w))
+                    rows = keep & (self.parameter_index == k) & (self.bracket[:, 0] == br[0]) & (
+                        self.bracket[:, 1] == br[1])
+                    if slope is None or np.unique(self.amplitude[rows]).size < 2:
+                        continue
+                    coef = np.polyfit(np.log(self.amplitude[rows]), np.log(err[rows]), 1)
+                    a = np.geomspace(self.amplitude[rows].min(), self.amplitude[rows].max(), 20)
+                    ax.loglog(a, np.exp(np.polyval(coef, np.log(a))), "-",
+                              color=dots.get_color(), label=f"slope {slope:.2f} (w + 1 = {w + 1})")
+        ax.set_xlabel("amplitude A")
+        ax.set_ylabel("|y − ŷ| in the group" + (" (max along the way)" if which == "along"
+                                                  else " (end point)"))
+        ax.set_title(f"{self.parameters.model}: {len(self)} bracket motions")
+        ax.legend(loc="best", fontsize="small")
+        return fig, ax
+
     # --- export ----------------------------------------------------------------------
     def columns(self) -> list[str]:
         """Column names of :meth:`rows` / :meth:`to_csv`."""

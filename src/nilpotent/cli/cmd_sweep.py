@@ -28,6 +28,7 @@ from nilpotent.cli.app import (
     stdout_console,
     write_atomically,
 )
+from nilpotent.cli.cmd_simulate import PlotOpt, check_plot_path, save_figure
 from nilpotent.errors import OptionError
 
 
@@ -184,6 +185,7 @@ def sweep_command(
         Path | None,
         typer.Option("--out", metavar="FILE.csv", help="Write one CSV row per sample."),
     ] = None,
+    plot: PlotOpt = None,
     at: AtOpt = None,
     param: ParamOpt = None,
     json_out: JsonOpt = False,
@@ -206,6 +208,7 @@ def sweep_command(
         raise OptionError(f"--bound must be > 0, got {bound}")
     if out is not None and not (out.parent == Path("") or out.parent.is_dir()):
         raise OptionError(f"--out {out}: folder {out.parent} does not exist")
+    check_plot_path(plot)
     varied = parse_vary(vary)
     system = load_model_option(model, param)
     pairs = [parse_int_pair(b, "--bracket", system.m) for b in bracket]
@@ -230,9 +233,14 @@ def sweep_command(
     if out is not None:
         with write_atomically(out, suffix=".csv") as tmp:
             result.to_csv(tmp)
+    if plot is not None:
+        fig, _ = result.plot()
+        save_figure(fig, plot)
     if json_out:
         emit_json(result.to_json())
         return
     print_sweep(result)
     if out is not None:
         stdout_console().print(f"{len(result)} rows written to {out}")
+    if plot is not None:
+        stdout_console().print(f"figure written to {plot}")
