@@ -473,6 +473,13 @@ def _check_vf(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
                     f": they place the legs at angles {_fmt_vec(vf_angles)} instead of "
                     f"{_fmt_vec(sec4_angles)}"
                 )
+                shifts = {
+                    sp.simplify(sp.Mod(a - b + sp.pi, 2 * sp.pi) - sp.pi)
+                    for a, b in zip(vf_angles, sec4_angles, strict=True)
+                }
+                if len(shifts) == 1:
+                    (shift,) = shifts
+                    why += f" (every leg turned by {_fmt(shift)}: another body frame)"
         yield _entry(
             f"sec4-vf-g{k + 1}",
             printed.section,

@@ -95,6 +95,8 @@ def _audit_table(audit: Audit) -> str:
         rows,
         row_classes=[e.verdict for e in audit.entries],
         cell_classes=("mono", "num", "", "mono", "mono", "verdict", ""),
+        widths=("10%", "3%", "20%", "22%", "20%", "6%", "19%"),
+        css_class="audit",
     )
 
 

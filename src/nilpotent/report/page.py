@@ -40,6 +40,9 @@ th, td { border: 1px solid var(--line); padding: .3em .5em; text-align: left;
          vertical-align: top; }
 th { background: #f4f4f6; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
+td.mono { font-family: ui-monospace, "SFMono-Regular", Menlo, Consolas, monospace;
+          font-size: .82em; overflow-wrap: anywhere; }
+table.audit td { overflow-wrap: anywhere; }
 tr.agrees td.verdict { color: var(--ok); background: var(--okbg); font-weight: 600; }
 tr.differs td.verdict { color: var(--bad); background: var(--badbg); font-weight: 600; }
 figure { margin: 1.2em 0; }
@@ -90,9 +93,19 @@ def table(
     row_classes: Sequence[str] | None = None,
     cell_classes: Sequence[str] | None = None,
     raw_columns: Sequence[int] = (),
+    widths: Sequence[str] | None = None,
+    css_class: str | None = None,
 ) -> str:
-    """An HTML table; cells are escaped except in ``raw_columns`` (already HTML)."""
+    """An HTML table; cells are escaped except in ``raw_columns`` (already HTML).
+
+    ``widths`` (CSS widths, one per column) fixes the layout; ``css_class`` names the table.
+    """
     head = "".join(f"<th>{_e(h)}</th>" for h in headers)
+    cols = ""
+    if widths:
+        cols = (
+            "<colgroup>" + "".join(f'<col style="width:{_e(w)}">' for w in widths) + "</colgroup>"
+        )
     body = []
     for r, row in enumerate(rows):
         cls = f' class="{_e(row_classes[r])}"' if row_classes else ""
@@ -102,7 +115,12 @@ def table(
             text = str(value) if c in raw_columns else _e(value)
             cells.append(f"<td{ccls}>{text}</td>")
         body.append(f"<tr{cls}>{''.join(cells)}</tr>")
-    return f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
+    cls_attr = f' class="{_e(css_class)}"' if css_class else ""
+    fixed = ' style="table-layout:fixed"' if widths else ""
+    return (
+        f"<table{cls_attr}{fixed}>{cols}<thead><tr>{head}</tr></thead>"
+        f"<tbody>{''.join(body)}</tbody></table>"
+    )
 
 
 def figure(

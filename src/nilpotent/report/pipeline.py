@@ -78,9 +78,9 @@ class Settings:
 
 
 #: The full reproduction.
-FULL = Settings(0.5, 181, 48, tuple(float(a) for a in np.geomspace(0.02, 0.5, 10)), 150, 80)
+FULL = Settings(0.3, 181, 48, tuple(float(a) for a in np.geomspace(0.02, 0.5, 10)), 150, 80)
 #: ``--quick``: fewer amplitudes, samples and frames (tests, CI).
-QUICK = Settings(0.5, 61, 8, (0.05, 0.1, 0.2, 0.4), 90, 60)
+QUICK = Settings(0.3, 61, 8, (0.05, 0.1, 0.2, 0.4), 90, 60)
 
 
 @dataclass(frozen=True)
