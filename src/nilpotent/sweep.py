@@ -67,6 +67,7 @@ from nilpotent.numeric.integrators import METHODS, Status, integrate
 __all__ = [
     "DEFAULT_AMPLITUDES",
     "DESIGNS",
+    "MIN_DASK_CHUNK",
     "SweepParameters",
     "SweepResult",
     "amplitude_range",
