@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from nilpotent.core.brackets import word_length
 from nilpotent.core.filtration import analyze, singular_locus
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import NotBracketGeneratingError, PointError
+from nilpotent.errors import ModelError, NotBracketGeneratingError, PointError
 from nilpotent.models import get_model
 
 x1, x2, x3, x4, x5 = sp.symbols("x1:6")
@@ -104,9 +104,17 @@ def test_max_length_too_short_is_an_error():
         analyze(ENGEL, max_length=2)
 
 
-def test_wrong_point_length():
+def test_invalid_points_and_fields():
     with pytest.raises(PointError):
         analyze(UNICYCLE, (0, 0))
+    with pytest.raises(PointError):
+        analyze(UNICYCLE, (0, 0, sp.I))
+    with pytest.raises(PointError):
+        analyze(UNICYCLE, (0, 0, sp.Symbol("a")))
+    with pytest.raises(PointError):
+        analyze(ControlSystem("pole", (x1, x2), ((1, 0), (0, 1 / x1))), (0, 0))
+    with pytest.raises(ModelError):
+        analyze(ControlSystem("free", (x1, x2), ((1, 0), (0, sp.Symbol("a")))))
 
 
 def test_exact_algebraic_and_numeric_points():

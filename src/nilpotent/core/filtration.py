@@ -9,15 +9,19 @@ bracket-generating there.  Bracket convention $[X,Y] = DY\\cdot X - DX\\cdot Y$.
 
 How it is computed
 ------------------
-1. *Generic growth vector* (at two pseudo-random points $q$ near $p$, values
-   evaluated with 212-bit floats, rank decided with the relative tolerance
-   :data:`GENERIC_TOL` after normalising each value to unit length).  A random
-   point is regular with probability one, so near $q$ the chosen words of length
-   $\\le s$ span $\\Delta^s$ as a module and $\\Delta^{s+1}(q)$ is spanned by them
-   and the brackets $[X_i, Y]$ with $Y$ a chosen word of length $s$: only
-   $m\\,(n_s - n_{s-1})$ new brackets per length.  At a regular point the span
-   grows at every length until it stops for ever, so the generic growth vector
-   ends after at most $n$ lengths.
+1. *Generic growth vector*, at a pseudo-random point $q$ near $p$ (fixed seed),
+   confirmed at a second one.  A random point is regular with probability
+   one, so near $q$ the words chosen up to length $s$ span $\\Delta^s$ as a
+   module and $\\Delta^{s+1}(q)$ is spanned by them and the brackets $[X_i, Y]$
+   with $Y$ a word chosen at length $s$: only $m\\,(n_s - n_{s-1})$ new
+   brackets per length.  At a regular point the span grows at every length
+   until it stops for ever, so this ends after at most $n$ lengths.  Values
+   are doubles; a new word $[u, v]$ is evaluated from the fields of $u$ and
+   $v$ by complex-step directional derivatives, so the longest fields are never
+   expanded.  Each value is normalised and its distance to the span decides
+   (independent above :data:`DOUBLE_INDEPENDENT`, dependent below
+   :data:`DOUBLE_DEPENDENT`); in between, 212-bit values and :data:`GENERIC_TOL`
+   decide.
 2. *At p* the Hall words of each length are scanned in order and kept when
    their value at $p$ is independent of those already kept (greedy, earliest
    first).  Since $n_s(p) \\le n_s(q)$ (rank is lower semicontinuous), the scan
@@ -56,7 +60,7 @@ from nilpotent.core.brackets import (
     word_values_at,
 )
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import NotBracketGeneratingError, PointError
+from nilpotent.errors import ModelError, NotBracketGeneratingError, PointError
 
 GENERIC_TOL = 1e-30
 """Relative tolerance of the 212-bit rank decisions at random points."""
@@ -477,11 +481,23 @@ def generic_growth_vector(
 
 
 def _normalise_point(sys: ControlSystem, point: Sequence[object] | None) -> tuple[sp.Expr, ...]:
+    """The point as sympy numbers; checks its length, that it is real, and the fields."""
+    extra = set().union(*(sp.S(e).free_symbols for f in sys.specialized_fields for e in f))
+    extra -= set(sys.coordinates)
+    if extra:
+        raise ModelError(
+            f"the fields of {sys.name!r} contain symbols that are neither coordinates nor "
+            f"parameters: {', '.join(sorted(map(str, extra)))}"
+        )
     if point is None:
         return sys.origin()
     if len(point) != sys.n:
         raise PointError(f"a point of {sys.name!r} has {sys.n} coordinates, got {len(point)}")
-    return tuple(sp.S(v) for v in point)
+    values = tuple(sp.S(v) for v in point)
+    for name, v in zip(sys.coordinate_names, values, strict=True):
+        if not (v.is_number and v.is_real is not False and v.is_finite is not False):
+            raise PointError(f"coordinate {name} of the point must be a real number, got {v}")
+    return values
 
 
 def analyze(
