@@ -31,7 +31,7 @@ fragment, so a change of the paper's source is noticed rather than misread.
 Examples
 --------
 >>> latex_to_grammar(r"\\sin(x_4-\\tfrac{2\\pi}{3})\\partial_{x_4}", {"x_4": "x4"})
-'(sin((x4 - ((2*pi)/(3)))))*D_x4'
+'sin(((x4 - ((2*pi)/(3)))))*D_x4'
 >>> latex_to_grammar(r"\\tfrac{\\sqrt 3x_1}{4}", {"x_1": "x1"})
 '((sqrt(3)*x1)/(4))'
 """
