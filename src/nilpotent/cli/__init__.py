@@ -6,18 +6,21 @@ notebooks can call it without a subprocess; :func:`run` is the console script.
 
 from __future__ import annotations
 
-import importlib.util as _ilu
 import sys
 from collections.abc import Sequence
 
 import typer
 
-from nilpotent.cli import cmd_analyze, cmd_approximate, cmd_models  # noqa: F401  (registers)
+from nilpotent.cli import (  # noqa: F401  (each module registers its command)
+    cmd_analyze,
+    cmd_approximate,
+    cmd_models,
+    cmd_reproduce,
+    cmd_scaling,
+    cmd_simulate,
+    cmd_sweep,
+)
 from nilpotent.cli.app import app
-
-for _optional in ("cmd_simulate", "cmd_scaling", "cmd_plan", "cmd_reproduce"):
-    if _ilu.find_spec(f"nilpotent.cli.{_optional}") is not None:
-        __import__(f"nilpotent.cli.{_optional}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
