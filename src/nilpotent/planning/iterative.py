@@ -4,9 +4,10 @@ Algorithm (Bellaïche–Jean–Risler; Vendittelli–Oriolo–Jean–Laumond), f
 ``x_0 = start``:
 
 1. at the anchor point (``"current"``: the iterate ``x_k``, re-approximating
-   every time; ``"goal"``: the goal, approximated once) build the nilpotent
-   approximation and its privileged coordinates ``y``
-   (:mod:`nilpotent.planning.local_model`);
+   every time; ``"goal"``: the goal, approximated once; ``"start"``: the
+   start, approximated once, the plan being computed backwards from the goal
+   and reversed) build the nilpotent approximation and its privileged
+   coordinates ``y`` (:mod:`nilpotent.planning.local_model`);
 2. steer the *nilpotent* system exactly from ``y(x_k)`` to ``y(goal)``
    (:func:`~nilpotent.planning.nilpotent.steer_nilpotent`);
 3. apply the same inputs to the true system from ``x_k`` (numerical
@@ -15,8 +16,9 @@ Algorithm (Bellaïche–Jean–Risler; Vendittelli–Oriolo–Jean–Laumond), f
 The approximation error is of higher weighted order, so near the goal the
 distance shrinks superlinearly.  Far from it a step can overshoot: then the
 target is pulled toward the anchor by dilations (``δ_s`` with
-``s = 1/2, 1/4, …``, in the privileged coordinates) and the first candidate
-that reduces the error is kept (all candidates are integrated as one batch).
+``s = 1/2, 1/4, …``, in the privileged coordinates; these candidates are
+integrated as one batch) and the one that most reduces the homogeneous
+distance to the goal is kept.
 The iteration stops when ``‖x_k − goal‖ ≤ tol`` (Euclidean, model
 coordinates), or raises :class:`~nilpotent.errors.PlanningError` when no
 candidate makes progress or ``max_iterations`` is exhausted.
@@ -214,6 +216,7 @@ def _iterate(
     tol: float,
     max_iterations: int,
     method: str,
+    engine: str,
 ) -> tuple[list[Segment], np.ndarray, float, list[Iteration], str]:
     """Nilpotent steps from ``x0`` toward ``xg``; ``model_at(x_k)`` gives the local model.
 
@@ -241,8 +244,13 @@ def _iterate(
         trials = _candidates(model, model.forward(x), model.forward(xg), method)
         if not trials:
             return segments, x, error, history, "the nilpotent system could not be steered"
-        ends = simulate_candidates(system, x, [segs for _, segs, _ in trials])
+        # the full step first; the damped ones (one batch) only if it makes no progress
+        ends = simulate_candidates(system, x, [trials[0][1]], engine)
         merits = np.array([merit(e) if np.all(np.isfinite(e)) else math.inf for e in ends])
+        if not merits[0] < distance and len(trials) > 1:
+            more = simulate_candidates(system, x, [segs for _, segs, _ in trials[1:]], engine)
+            ends = np.vstack([ends, more])
+            merits = np.array([merit(e) if np.all(np.isfinite(e)) else math.inf for e in ends])
         pick = int(np.argmin(merits))
         if not merits[pick] < distance:
             return segments, x, error, history, (
@@ -276,6 +284,7 @@ def plan(
     method: str = "auto",
     raise_on_failure: bool = True,
     trajectory_points: int = 40,
+    engine: str = "auto",
 ) -> Plan:
     """Steer ``sys`` from ``start`` to ``goal`` by iterated nilpotent steering.
 
@@ -314,6 +323,9 @@ def plan(
         with ``False`` return the best plan found (``converged`` is False).
     trajectory_points:
         Samples per segment of :attr:`Plan.trajectory`.
+    engine:
+        Integration engine of the true system
+        (:data:`nilpotent.planning.simulation.ENGINES`).
 
     Raises
     ------
@@ -356,10 +368,10 @@ def plan(
         fixed = build(system, start)
         back, _, _, history, failure = _iterate(
             system, xg, x0, lambda x: fixed, fixed, max(tol / 100, 1e-13), max_iterations,
-            method,
+            method, engine,
         )
         segments = list(reverse_segments(back))
-        x = simulate_candidates(system, x0, [segments])[0]
+        x = simulate_candidates(system, x0, [segments], engine)[0]
         error = float(np.linalg.norm(x - xg))
         if error <= tol:
             failure = ""
@@ -377,9 +389,9 @@ def plan(
                 return build(system, x)
 
         segments, x, error, history, failure = _iterate(
-            system, x0, xg, model_at, at_goal, tol, max_iterations, method
+            system, x0, xg, model_at, at_goal, tol, max_iterations, method, engine
         )
-    times, states = simulate_path(system, x0, segments, trajectory_points)
+    times, states = simulate_path(system, x0, segments, trajectory_points, engine)
     result = Plan(
         system=system,
         start=tuple(float(v) for v in x0),

@@ -86,8 +86,13 @@ def _rank(mat: np.ndarray) -> int:
 
 
 def _values(compiled: CompiledSystem, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    fields = compiled.field_values(p)[0]  # (n, m)
-    jac = compiled.jacobian(p)[0]  # (m, n, n)
+    with np.errstate(all="ignore"):
+        fields = compiled.field_values(p)[0]  # (n, m)
+        jac = compiled.jacobian(p)[0]  # (m, n, n)
+    if not (np.all(np.isfinite(fields)) and np.all(np.isfinite(jac))):
+        raise SingularPointError(
+            f"the fields of {compiled.name} are not defined (not finite) at {_fmt(p)}"
+        )
     m = fields.shape[1]
     brackets = [
         jac[b] @ fields[:, a] - jac[a] @ fields[:, b] for a in range(m) for b in range(a + 1, m)
@@ -279,9 +284,14 @@ BUILDERS: dict[str, Callable[[ControlSystem, Sequence[object]], LocalModel]] = {
 
 
 def choose_builder(system: ControlSystem, point: Sequence[float]) -> str:
-    """``"numeric"`` where fields and first brackets span the space at ``point``.
+    """``"numeric"`` where the system has step ≤ 2 generically near ``point``.
 
-    Else ``"symbolic"``.
+    That is, fields and first brackets span the space at random points nearby
+    (at the point itself they may not: it is then singular, which the
+    numeric builder reports).  Else ``"symbolic"``.
     """
-    _, n2 = numeric_growth(compiled_system(system), np.asarray(point, dtype=float))
-    return "numeric" if n2 == system.n else "symbolic"
+    compiled = compiled_system(system)
+    p = np.array([float(v) for v in point])  # type: ignore[arg-type]
+    if numeric_growth(compiled, p)[1] == system.n:
+        return "numeric"
+    return "numeric" if generic_growth(compiled, p)[1] == system.n else "symbolic"

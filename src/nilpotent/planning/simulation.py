@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import IntegrationError
+from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import numba_available
 from nilpotent.numeric.inputs import HarmonicInputs
 from nilpotent.numeric.integrators import integrate
@@ -49,12 +49,26 @@ def harmonic_inputs(batch: Sequence[Sequence[Segment]]) -> HarmonicInputs:
     return HarmonicInputs(durations, omegas, constant, cos, sin)
 
 
-def _engine() -> str:
-    return "numba" if numba_available() else "scipy"
+#: Integration engines: ``"numba"`` (compiled DOP853; the first use of a model
+#: compiles its kernels, about 10 s, cached on disk), ``"scipy"`` (solve_ivp
+#: DOP853, no compilation, slower per trajectory), ``"auto"`` (numba when
+#: installed).
+ENGINES = ("auto", "numba", "scipy")
+
+
+def _engine(engine: str) -> str:
+    if engine not in ENGINES:
+        raise OptionError(f"unknown engine {engine!r} (choose from {', '.join(ENGINES)})")
+    if engine == "auto":
+        return "numba" if numba_available() else "scipy"
+    return engine
 
 
 def simulate_candidates(
-    system: ControlSystem, x0: Sequence[float], candidates: Sequence[Sequence[Segment]]
+    system: ControlSystem,
+    x0: Sequence[float],
+    candidates: Sequence[Sequence[Segment]],
+    engine: str = "auto",
 ) -> np.ndarray:
     """End states ``(len(candidates), n)`` of the true system from ``x0``; NaN where it failed."""
     compiled = compiled_system(system)
@@ -70,7 +84,7 @@ def simulate_candidates(
         inputs = harmonic_inputs([candidates[i] for i in idxs])
         sol = integrate(
             compiled, np.repeat(x[None, :], len(idxs), axis=0), inputs,
-            engine=_engine(), rtol=RTOL, atol=ATOL,
+            engine=_engine(engine), rtol=RTOL, atol=ATOL,
         )
         final = np.array(sol.final)
         final[~sol.ok] = np.nan
@@ -83,6 +97,7 @@ def simulate_path(
     x0: Sequence[float],
     segments: Sequence[Segment],
     points_per_segment: int = 40,
+    engine: str = "auto",
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(times, states)`` of the true system under ``segments``, sampled in every segment."""
     if not segments:
@@ -97,7 +112,7 @@ def simulate_path(
     times = times[times <= starts[-1]]
     sol = integrate(
         compiled_system(system), np.asarray(x0, dtype=float), harmonic_inputs([segments]),
-        engine=_engine(), rtol=RTOL, atol=ATOL, times=times,
+        engine=_engine(engine), rtol=RTOL, atol=ATOL, times=times,
     )
     if not sol.all_ok:
         raise IntegrationError(

@@ -1,0 +1,144 @@
+"""Iterative steering of true systems: goals reached, checked by an independent simulation.
+
+The oracle re-simulates the returned segments with scipy's solve_ivp (DOP853,
+rtol 1e-13) on the model's fields lambdified by sympy, independently of the
+planner's integrator and of its nilpotent models.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.integrate import solve_ivp
+
+from nilpotent.errors import PlanningError, SingularPointError
+from nilpotent.models import get_model
+from nilpotent.planning import Plan, Segment, plan
+
+
+def resimulate(system, start, segments) -> np.ndarray:
+    params = {sp.Symbol(k): v for k, v in system.parameters}
+    mat = sp.lambdify(
+        [system.coordinates], sp.Matrix(system.fields).T.xreplace(params), "numpy"
+    )
+    x = np.asarray(start, dtype=float)
+    for seg in segments:
+        def rhs(t, z, seg=seg):
+            return np.asarray(mat(z), dtype=float) @ seg.values(t)
+
+        sol = solve_ivp(rhs, (0, seg.duration), x, method="DOP853", rtol=1e-13, atol=1e-14)
+        x = sol.y[:, -1]
+    return x
+
+
+# (model, goal scale, number of goals, engine): the trident snake uses the compiled
+# engine (the default); the others scipy, so that the suite compiles no kernel for them
+CASES = [
+    ("trident-snake", 0.15, 3, "auto"),
+    ("trident-snake-paper", 0.15, 2, "scipy"),
+    ("unicycle", 0.2, 3, "scipy"),
+    ("engel", 0.1, 2, "scipy"),
+    ("car-trailers:1", 0.05, 2, "scipy"),
+    pytest.param("car-trailers:2", 0.03, 1, "scipy", marks=pytest.mark.slow),
+]
+
+
+@pytest.mark.parametrize(("name", "scale", "count", "engine"), CASES)
+def test_random_goals_reached_to_1e8(name, scale, count, engine):
+    system = get_model(name)
+    rng = np.random.default_rng(11)
+    start = np.zeros(system.n)
+    for _ in range(count):
+        goal = rng.normal(scale=scale, size=system.n)
+        p = plan(system, start, goal, tol=1e-9, engine=engine)
+        assert p.converged and p.error <= 1e-9
+        if p.anchor == "current":
+            assert p.iterations[-1].error == pytest.approx(p.error)
+        reached = resimulate(system, start, p.segments)
+        assert np.linalg.norm(reached - goal) <= 1e-8
+
+
+def test_trident_from_a_generic_start_and_parameters():
+    system = get_model("trident-snake", {"r": sp.Rational(1, 2), "l": sp.Rational(3, 2)})
+    start = np.array([0.3, -0.2, 0.5, 0.1, -0.3, 0.2])
+    goal = start + np.array([0.05, 0.1, -0.08, 0.1, 0.05, -0.1])
+    p = plan(system, start, goal, engine="scipy")
+    assert np.linalg.norm(resimulate(system, start, p.segments) - goal) <= 1e-8
+
+
+def test_errors_decrease_superlinearly_on_the_trident():
+    system = get_model("trident-snake")
+    goal = np.array([0.05, -0.04, 0.03, 0.08, -0.06, 0.05])
+    p = plan(system, np.zeros(6), goal, tol=1e-10)
+    errors = [p.initial_error] + [it.error for it in p.iterations]
+    assert all(b < a for a, b in itertools.pairwise(errors))
+    # order > 1: the ratios of successive errors shrink
+    ratios = [b / a for a, b in itertools.pairwise(errors)]
+    assert ratios[-1] < ratios[0] / 10
+
+
+def test_anchors_agree_on_reaching_the_goal():
+    system = get_model("unicycle")
+    goal = np.array([0.1, 0.05, -0.2])
+    for anchor in ("current", "goal", "start"):
+        p = plan(system, np.zeros(3), goal, anchor=anchor, engine="scipy")
+        assert p.anchor == anchor
+        assert np.linalg.norm(resimulate(system, np.zeros(3), p.segments) - goal) <= 1e-8
+
+
+def test_plan_json_is_the_interface_schema():
+    system = get_model("unicycle")
+    p = plan(system, (0, 0, 0), (sp.Rational(1, 10), 0, 0), engine="scipy")
+    data = json.loads(json.dumps(p.to_json(), allow_nan=False))
+    assert data["schema"] == "nilpotent/plan@1"
+    for key in ("model", "coordinates", "from", "to", "reached", "error", "iterations",
+                "segments"):
+        assert key in data
+    assert data["to"] == [0.1, 0.0, 0.0]
+    segs = [Segment.from_dict(s) for s in data["segments"]]
+    assert np.linalg.norm(resimulate(system, data["from"], segs) - np.array(data["to"])) <= 1e-8
+    for seg in data["segments"]:
+        assert set(seg) == {"duration", "omega", "inputs"}
+        for inp in seg["inputs"]:
+            assert set(inp) == {"constant", "cos", "sin"}
+
+
+def test_start_equal_goal_gives_an_empty_plan():
+    p = plan(get_model("unicycle"), (0, 0, 0), (0, 0, 0), engine="scipy")
+    assert p.segments == () and p.error == 0 and isinstance(p, Plan)
+
+
+def test_singular_start_is_reported():
+    # Martinet at the origin: growth (2, 2, 3), singular
+    with pytest.raises(SingularPointError):
+        plan(get_model("martinet"), (0, 0, 0), (0.1, 0.1, 0.01), engine="scipy")
+
+
+def test_singular_joint_configuration_is_reported():
+    # all legs along +y: the wheel axles are parallel, the joint form is undefined
+    q = (0, 0, 0, np.pi / 2, -np.pi / 6, -5 * np.pi / 6)
+    with pytest.raises(SingularPointError):
+        plan(get_model("trident-snake-joints"), q, np.array(q) + 0.01, engine="scipy")
+
+
+def test_bad_options_are_planning_errors():
+    system = get_model("unicycle")
+    with pytest.raises(PlanningError, match="anchor"):
+        plan(system, (0, 0, 0), (0.1, 0, 0), anchor="nowhere")
+    with pytest.raises(PlanningError, match="tol"):
+        plan(system, (0, 0, 0), (0.1, 0, 0), tol=-1)
+    with pytest.raises(PlanningError, match="coordinates"):
+        plan(system, (0, 0), (0.1, 0, 0))
+
+
+def test_failure_returns_best_plan_when_asked():
+    system = get_model("trident-snake")
+    goal = np.array([0.05, -0.04, 0.03, 0.08, -0.06, 0.05])
+    with pytest.raises(PlanningError, match="not reached"):
+        plan(system, np.zeros(6), goal, max_iterations=1)
+    p = plan(system, np.zeros(6), goal, max_iterations=1, raise_on_failure=False)
+    assert not p.converged and len(p.iterations) == 1 and p.error < p.initial_error
