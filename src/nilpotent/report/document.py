@@ -15,6 +15,7 @@ from typing import Any
 
 import sympy as sp
 
+from nilpotent.models.trident import BODY_LEG_ANGLES, PAPER_LEG_ANGLES
 from nilpotent.report.audit import Audit, format_field
 from nilpotent.report.page import animation, code, figure, page, table
 
@@ -25,6 +26,10 @@ def _fmt(value: Any) -> str:
     from nilpotent.core.expressions import format_expression
 
     return format_expression(sp.S(value))
+
+
+def _angles(values: Any) -> str:
+    return ", ".join(_fmt(v) for v in values)
 
 
 def _fig(stem: str, caption: str) -> str:
@@ -85,6 +90,18 @@ def _privileged_block(label: str, system, approx) -> str:
     )
 
 
+def _audit_note(audit: Audit, *ids: str) -> str:
+    """What the audit found on these entries (verdict and explanation), as a note."""
+    items = []
+    for entry_id in ids:
+        e = audit.entry(entry_id)
+        items.append(
+            f"<li>{code(e.id)} ({html.escape(e.verdict)}): {html.escape(e.statement)} — "
+            f"{html.escape(e.explanation)}</li>"
+        )
+    return f'<div class="note">Audit:<ul>{"".join(items)}</ul></div>'
+
+
 def _audit_table(audit: Audit) -> str:
     rows = [
         (e.id, e.section, e.statement, e.paper, e.computed, e.verdict, e.explanation)
@@ -129,7 +146,7 @@ def build_page(
         f'<div class="card"><b>{n_diff}</b>differ</div>'
         f'<div class="card"><b>{filtrations["body"].growth_vector}</b>growth vector</div>'
         f'<div class="card"><b>{approximations["vf"].certificate.nilpotent_step}</b>'
-        "nilpotency step (paper: 1)</div></div>"
+        f"nilpotency step (paper: {paper.step_claim})</div></div>"
         '<p class="note">Everything on this page was computed when it was generated '
         f"({'quick' if quick else 'full'} settings), from the built-in models "
         f"{code('trident-snake')} (the paper's Section 4, r = l = 1) and "
@@ -148,14 +165,12 @@ def build_page(
         "joint angles. The no-side-slip constraint of wheel i, with ψ_i = θ + α_i + φ_i, is "
         f"{code('−sin ψ_i ẋ + cos ψ_i ẏ + (r cos φ_i + l) θ̇ + l φ̇_i = 0')}; with "
         "body-velocity inputs it gives the fields of the paper's Section 4 "
-        "(legs at α = 0, 2π/3, 4π/3):</p>"
+        f"(legs at α = {_angles(BODY_LEG_ANGLES)}):</p>"
         + _fields_table(body, body.specialized_fields, body.coordinates, "g")
         + "<p>The paper then works with its simplified eq. vf (the rotation R_θ dropped, "
-        "legs read at −2π/3, 0, 2π/3):</p>"
+        f"legs read at {_angles(PAPER_LEG_ANGLES)}):</p>"
         + _fields_table(vf, vf.specialized_fields, vf.coordinates, "g")
-        + '<p class="note">These two systems are not the same robot in other coordinates: '
-        "the span of the three brackets is involutive for eq. vf and not for Section 4's "
-        "fields (audit entry <code>sec4-vf-same-system</code>).</p>"
+        + _audit_note(audit, "sec4-vf-same-system", "sec4-vf-g1")
     )
 
     bracket_rows = []
@@ -180,9 +195,9 @@ def build_page(
     )
 
     privileged = (
-        "<p>The paper's Section 5 matrix does not give ∂/∂y_i = g_i at 0 and its y4, y5, y6 "
-        "have order 1 (audit entries <code>sec5-*</code>). The coordinates below are "
-        "computed by the library, with their orders as a certificate.</p>"
+        _audit_note(audit, "sec5-matrix-condition", "sec5-privileged", "sec6-first-order")
+        + "<p>The coordinates below are computed by the library, with their orders as a "
+        "certificate.</p>"
         + _privileged_block("eq. vf (the paper's form)", vf, approximations["vf"])
         + _privileged_block("Section 4 fields (the robot)", body, approximations["body"])
     )
