@@ -86,7 +86,7 @@ def plot_plan(plan: Plan) -> Figure:
     return fig
 
 
-def animate_plan(plan: Plan, path: str | Path, *, frames: int = 90, fps: float = 15.0,
+def animate_plan(plan: Plan, path: str | Path, *, frames: int = 60, fps: float = 12.0,
                  dpi: int = 80) -> Path:
     """Write a GIF (matplotlib's ``PillowWriter``) of the system moving along the plan."""
     from matplotlib.animation import FuncAnimation, PillowWriter
