@@ -520,6 +520,40 @@ def test_unicycle_sheared_at_exact_point(cli, tmp_path):
     assert data["method"] == "linear"
 
 
+@pytest.mark.parametrize("method", [None, "algebraic", "exponential"])
+def test_rolling_disk(cli, tmp_path, method):
+    """A vertical rolling disk (ẋ = cos θ, ẏ = sin θ, φ̇ = 1 on X1; θ̇ on X2), coordinates
+    in the order (phi, x, theta, y): growth (2, 3, 4), since X1 − [X2,[X1,X2]] = ∂φ."""
+    x, y, th, ph = sp.symbols("x y theta phi")
+    coords = (ph, x, th, y)
+    fields = [(1, sp.cos(th), 0, sp.sin(th)), (0, 0, 1, 0)]
+    f = write_model(tmp_path / "disk.toml", "rolling-disk", coords, fields)
+    point = [sp.Rational(1, 2), 0, sp.pi / 6, 1]
+    args = ["approximate", f, "--at", "phi=1/2,theta=pi/6,y=1"]
+    data = run_json(cli, *args + (["--method", method] if method else []))
+    weights, *_ = check_approximation(data, coords, fields, point, method=method)
+    assert weights == (1, 1, 2, 3)
+
+
+@pytest.mark.parametrize("case", ["denested-radical", "trig-value"])
+def test_zero_only_after_simplification(cli, tmp_path, case):
+    """[X1,X2](p) = 0 only after denesting sqrt(3+2 sqrt 2) = 1 + sqrt 2, or using
+    sin(pi/12) = (sqrt 6 − sqrt 2)/4: the growth drops to (2, 2, 3) there."""
+    a, b, c = sp.symbols("a b c")
+    if case == "denested-radical":
+        fields = [(1, 0, 0), (0, 1, (a - 1 - sp.sqrt(2)) ** 2)]
+        point, at_text = [sp.sqrt(3 + 2 * sp.sqrt(2)), 0, 0], "a=sqrt(3+2*sqrt(2))"
+    else:
+        fields = [(1, 0, 0), (0, 1, (sp.sin(a) - (sp.sqrt(6) - sp.sqrt(2)) / 4) ** 2)]
+        point, at_text = [sp.pi / 12, 0, 0], "a=pi/12"
+    f = write_model(tmp_path / "z.toml", case, (a, b, c), fields)
+    data = run_json(cli, "analyze", f, "--at", at_text)
+    growth, _ = check_analysis(data, (a, b, c), fields, point)
+    assert growth == (2, 2, 3) and data["regular"] is False
+    data = run_json(cli, "approximate", f, "--at", at_text)
+    check_approximation(data, (a, b, c), fields, point)
+
+
 @pytest.mark.slow
 def test_trailer_rotated_step3_trig(cli, tmp_path):
     coords, fields = trailer_rotated()
@@ -550,6 +584,23 @@ def test_decimal_points(cli, tmp_path, case, at_text):
     check_analysis(data, coords, fields, point, exact=False)
     data = run_json(cli, "approximate", f, "--at", at_text)
     check_approximation(data, coords, fields, point, exact=False)
+
+
+@pytest.mark.slow
+def test_car_two_trailers_step4_trig(cli, tmp_path):
+    """Unicycle with two trailers (growth (2,3,4,5)) at angles pi/4, pi/3, pi/2, coordinates
+    out of order; the default (algebraic) coordinates must pass every property."""
+    x, y, t0, t1, t2 = sp.symbols("x y t0 t1 t2")
+    X1 = (sp.cos(t0), sp.sin(t0), 0, sp.sin(t0 - t1), sp.cos(t0 - t1) * sp.sin(t1 - t2))
+    X2 = (0, 0, 1, 0, 0)
+    order = (4, 0, 3, 1, 2)
+    coords = tuple((x, y, t0, t1, t2)[k] for k in order)
+    fields = [tuple(X[k] for k in order) for X in (X1, X2)]
+    f = write_model(tmp_path / "trailers2.toml", "trailers2", coords, fields)
+    point = [sp.pi / 4, 0, sp.pi / 3, 0, sp.pi / 2]
+    data = run_json(cli, "approximate", f, "--at", "t2=pi/4,t1=pi/3,t0=pi/2")
+    weights, *_ = check_approximation(data, coords, fields, point)
+    assert weights == (1, 1, 2, 3, 4)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -805,6 +856,36 @@ def test_hostile_model_files(cli, name, tmp_path):
             assert needle in message, (needle, message)
         assert "\n" not in message.strip(), message
     assert not canary.exists()
+
+
+NOT_SMOOTH = {
+    # components that are not smooth (not analytic) at a = 0
+    "sqrt.toml": 'c = "sqrt(a)"',
+    "abs.toml": 'c = "sqrt(a**2)"',
+    "cube_root.toml": 'c = "(a**2)**(1/3)"',
+}
+
+
+@pytest.mark.parametrize("name", sorted(NOT_SMOOTH))
+@pytest.mark.parametrize("command", ["approximate", "simulate"])
+def test_fields_not_smooth_at_point_refused_cleanly(cli, tmp_path, name, command):
+    """A field that is not smooth at p has no nilpotent approximation there: exit 2 with a
+    JSON error, never a traceback (the same files are fine at a = 1)."""
+    f = tmp_path / name
+    f.write_text(
+        'name = "not-smooth"\ncoordinates = ["a", "b", "c"]\n'
+        f'[[fields]]\na = "1"\n{NOT_SMOOTH[name]}\n[[fields]]\nb = "1"\nc = "a"\n'
+    )
+    extra = ["--bracket", "1,2", "--amplitude", "0.01"] if command == "simulate" else []
+    data = run_json(cli, command, f, *extra, "--at", "a=1")
+    assert "error" not in data
+    try:
+        status, out, err = cli(command, f, *extra, "--at", "a=0", "--json")
+    except Exception as exc:  # the CLI let an internal error through
+        pytest.fail(f"nilpotent {command} {name} --at a=0 --json raised {exc!r}")
+    assert status == 2, (status, out, err)
+    assert "Traceback" not in err
+    assert set(json.loads(out)) == {"error"}
 
 
 def test_hostile_power_refused_quickly():
