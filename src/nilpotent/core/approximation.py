@@ -401,7 +401,7 @@ def _pushforward_ok(
     approx: NilpotentApproximation, hat: Sequence[Sequence[Poly]], zero: ZeroTest
 ) -> bool:
     coords = approx.coordinates
-    ctx = _Context.of(approx.filtration)
+    ctx = _Context.of(approx.filtration, approx.coordinates.numeric)
     w = coords.weights
     n = coords.n
     exact = coords.inverse_exact and coords.forward_exact and approx.fields_x_exact
@@ -414,7 +414,7 @@ def _pushforward_ok(
         comps = [to_symengine(c) for c in fx]
         for j in range(n):
             exprs.append(se.expand(se.Add(*[jac[j][k] * comps[k] for k in range(n)])))
-    jets = weighted_jets(exprs, xs, ctx.x_of(coords.inverse_poly), w, max(degrees))
+    jets = weighted_jets(exprs, xs, ctx.x_of(coords.inverse_poly), w, max(degrees), ctx.numeric)
     for i, h in enumerate(hat):
         for j in range(n):
             diff = (jets[i * n + j] - h[j]).truncate(w, degrees[j])
@@ -443,7 +443,7 @@ def certify(approx: NilpotentApproximation) -> Certificate:
     jets = coords.field_jets(extra=1)
     rem = _remainder_orders(jets, hat, w, zero)
     push = _pushforward_ok(approx, hat, zero)
-    ctx_zero = _Context.of(approx.filtration).zero
+    ctx_zero = _Context.of(approx.filtration, approx.coordinates.numeric).zero
     return Certificate(
         orders=coords.orders,
         weights=w,
@@ -468,7 +468,7 @@ def _pushforward(
     coords: PrivilegedCoordinates, hat: Sequence[Sequence[Poly]]
 ) -> tuple[tuple[tuple[sp.Expr, ...], ...], bool]:
     r"""$[\hat X]_x = B\,(\partial\chi/\partial y)(\psi(z))\,\hat X(\psi(z))$ at $z = A(x - p)$."""
-    ctx = _Context.of(coords.filtration)
+    ctx = _Context.of(coords.filtration, coords.numeric)
     n = coords.n
     exact = coords.forward_exact and coords.inverse_exact
     ones = [1] * n
@@ -479,9 +479,7 @@ def _pushforward(
     ]
     d = [Poly.variable(n, k) for k in range(n)]
     lin = ctx.apply_A(d)
-    shifts = [
-        c - p if p != 0 else c for c, p in zip(coords.system.coordinates, coords.point, strict=True)
-    ]
+    shifts = [c - p if p != 0 else c for c, p in zip(coords.system.coordinates, ctx.p, strict=True)]
     out = []
     for h in hat:
         hz = [c.compose(fwd, ones, top) for c in h]
@@ -544,7 +542,7 @@ def approximate(
     """
     coords = privileged_coordinates(sys, point, method)
     w = coords.weights
-    ctx = _Context.of(coords.filtration)
+    ctx = _Context.of(coords.filtration, coords.numeric)
     jets = coords.field_jets(extra=1)
     hat = [
         tuple(c.homogeneous_part(w, w[j] - 1).drop_zeros(ctx.zero) for j, c in enumerate(comps))

@@ -103,6 +103,9 @@ class PrivilegedCoordinates:
     forward_order:
         For ``exponential``: $y_j$ is kept to ordinary degree $w_j +$
         ``forward_order`` in $x - p$.
+    numeric:
+        Whether the coefficients are floating-point numbers (15 digits) instead
+        of exact numbers (see :func:`privileged_coordinates`).
     frame_matrix:
         $B$, column $k$ is $Y_{k+1}(p)$ (so $\partial_{z_k}|_p = Y_{k+1}(p)$).
     linear_part:
@@ -119,6 +122,7 @@ class PrivilegedCoordinates:
     orders: tuple[int, ...]
     forward_exact: bool = True
     forward_order: int | None = None
+    numeric: bool = False
     frame_matrix: sp.ImmutableMatrix = field(default=None, repr=False)  # type: ignore[assignment]
     linear_part: sp.ImmutableMatrix = field(default=None, repr=False)  # type: ignore[assignment]
     forward_poly: tuple[Poly, ...] = field(default=(), repr=False, compare=False)
@@ -160,7 +164,7 @@ class PrivilegedCoordinates:
         """
         key = ("field_jets", extra)
         if key not in self._cache:
-            ctx = _Context.of(self.filtration)
+            ctx = _Context.of(self.filtration, self.numeric)
             degrees = [w - 1 + extra for w in self.weights]
             self._cache[key] = _fields_in(
                 ctx, self.forward_poly, self.inverse_poly, self.weights, degrees
@@ -198,12 +202,12 @@ class PrivilegedCoordinates:
 class _Context:
     """What every construction needs: frame matrices, fields in symengine, the zero test."""
 
-    def __init__(self, filtration: Filtration) -> None:
+    def __init__(self, filtration: Filtration, numeric: bool) -> None:
         sys = filtration.system
         self.filtration = filtration
+        self.numeric = numeric
         self.sys = sys
         self.n = sys.n
-        self.p = filtration.point
         self.weights = filtration.weights
         self.step = filtration.step
         self.xsyms = tuple(se.Symbol(str(c)) for c in sys.coordinates)
@@ -212,8 +216,14 @@ class _Context:
         )
         n = self.n
         B = sp.Matrix(n, n, lambda j, k: filtration.frame_values[k][j])
-        A = B.inv()
-        A = A.applyfunc(lambda e: sp.radsimp(e) if e.has(sp.Pow) else e)
+        if numeric:
+            self.p = tuple(sp.Float(sp.N(v, 20), 15) for v in filtration.point)
+            B = B.applyfunc(lambda e: sp.Float(sp.N(e, 20), 15))
+            A = B.inv(method="LU")
+        else:
+            self.p = filtration.point
+            A = B.inv()
+            A = A.applyfunc(lambda e: sp.radsimp(e) if e.has(sp.Pow) else e)
         self.B = sp.ImmutableMatrix(B)
         self.A = sp.ImmutableMatrix(A)
         self.Bse = [[to_symengine(B[j, k]) for k in range(n)] for j in range(n)]
@@ -221,11 +231,11 @@ class _Context:
         self.zero = ZeroTest()
 
     @staticmethod
-    def of(filtration: Filtration) -> _Context:
+    def of(filtration: Filtration, numeric: bool = False) -> _Context:
         cache = filtration.system._cache.setdefault("privileged.contexts", {})
-        key = (filtration.point, filtration.frame)
+        key = (filtration.point, filtration.frame, numeric)
         if key not in cache:
-            cache[key] = _Context(filtration)
+            cache[key] = _Context(filtration, numeric)
         return cache[key]
 
     def x_of(self, inverse_poly: Sequence[Poly]) -> list[Poly]:
@@ -273,7 +283,7 @@ def _fields_in(
     D = max(degrees)
     xargs = ctx.x_of(inverse_poly)
     flat = [c for f in ctx.fields for c in f]
-    jets = weighted_jets(flat, ctx.xsyms, xargs, weights, D)
+    jets = weighted_jets(flat, ctx.xsyms, xargs, weights, D, ctx.numeric)
     linear = all(
         len(f.terms) == 1 and f.terms.get(tuple(int(i == j) for i in range(n))) == 1
         for j, f in enumerate(forward_poly)
@@ -431,7 +441,7 @@ def _exponential_map(ctx: _Context, degree: int) -> list[Poly]:
         base = E
         cur = base
         for _ in range(degree // wl + 2):
-            vals = weighted_jets(Y, ctx.xsyms, cur, w, degree - wl)
+            vals = weighted_jets(Y, ctx.xsyms, cur, w, degree - wl, ctx.numeric)
             new = [b + _integrate(v, l) for b, v in zip(base, vals, strict=True)]
             if all(a.terms == b.terms for a, b in zip(new, cur, strict=True)):
                 break
@@ -514,6 +524,22 @@ METHODS: dict[str, Callable[[_Context], Built]] = {
 accepted by :func:`privileged_coordinates` besides these."""
 
 
+def needs_floats(filtration: Filtration) -> bool:
+    """Whether exact arithmetic at the filtration's point would carry transcendental values.
+
+    True when the point has floats, or the values at $p$ of the fields or of the
+    frame words contain function values (``cos(1/5)``, ``exp(1)``) that exact
+    arithmetic cannot simplify.
+    """
+    p = filtration.point
+    if any(isinstance(v, sp.Float) or v.atoms(sp.Float) for v in p):
+        return True
+    at = dict(zip(filtration.system.coordinates, p, strict=True))
+    values = [v for f in filtration.frame_values for v in f]
+    values += [e.xreplace(at) for f in filtration.system.specialized_fields for e in f]
+    return any(v.atoms(sp.Function) or v.atoms(sp.Float) for v in values)
+
+
 def coordinate_names(sys: ControlSystem) -> tuple[sp.Symbol, ...]:
     """Symbols ``y1..yn`` for the privileged coordinates (another letter if the model uses them)."""
     taken = set(sys.coordinate_names) | {k for k, _ in sys.parameters}
@@ -530,7 +556,7 @@ def _to_sympy_in_x(ctx: _Context, polys: Sequence[Poly]) -> tuple[sp.Expr, ...]:
     d = [Poly.variable(n, k) for k in range(n)]
     lin = ctx.apply_A(d)  # z = A d, d = x − p
     shifts = [c - p if p != 0 else c for c, p in zip(ctx.sys.coordinates, ctx.p, strict=True)]
-    return tuple(f.compose(lin).to_sympy(shifts) for f in polys)
+    return tuple(f.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts) for f in polys)
 
 
 def privileged_coordinates(
@@ -538,6 +564,8 @@ def privileged_coordinates(
     point: Sequence[object] | None = None,
     method: str = "auto",
     filtration: Filtration | None = None,
+    *,
+    numeric: bool | None = None,
 ) -> PrivilegedCoordinates:
     r"""Privileged coordinates of ``sys`` at ``point``, with computed orders.
 
@@ -551,6 +579,13 @@ def privileged_coordinates(
         ``"auto"`` (default), or a name in :data:`METHODS`.
     filtration:
         A precomputed :func:`~nilpotent.core.filtration.analyze` result at $p$.
+    numeric:
+        ``False``: exact coefficients; ``True``: floating-point coefficients
+        (15 digits); ``None`` (default): exact unless the values of the fields
+        or of the frame at $p$ involve transcendental function values
+        (``cos(1/5)``) or floats, where exact arithmetic cannot simplify
+        ($\sin^2 + \cos^2$ is not recognised as 1) and expressions swell; the
+        result says which in ``numeric``.
 
     Returns
     -------
@@ -587,7 +622,9 @@ def privileged_coordinates(
             f"{f.growth_vector[-1]} of {sys.n} dimensions (growth vector {f.growth_vector}); "
             "no privileged coordinates"
         )
-    ctx = _Context.of(f)
+    if numeric is None:
+        numeric = needs_floats(f)
+    ctx = _Context.of(f, numeric)
     if method == "auto":
         built = _linear(ctx)
         orders, jets = _certified_orders(ctx, built[0], built[1], quick=True)
@@ -619,12 +656,13 @@ def privileged_coordinates(
         filtration=f,
         names=names,
         forward=_to_sympy_in_x(ctx, forward_poly),
-        inverse=tuple(e.to_sympy(names) for e in x_of_y),
+        inverse=tuple(e.drop_zeros(ctx.zero).to_sympy(names) for e in x_of_y),
         inverse_exact=inv_exact,
         inverse_order=inv_order,
         orders=tuple(int(o) for o in orders),
         forward_exact=fwd_exact,
         forward_order=fwd_order,
+        numeric=numeric,
         frame_matrix=ctx.B,
         linear_part=ctx.A,
         forward_poly=tuple(forward_poly),

@@ -65,18 +65,25 @@ class ZeroTest:
     """Decide whether an exact coefficient is zero.
 
     Structural first (symengine's canonical form after expansion); where that
-    leaves a non-number, the value at :attr:`digits` digits decides, and
-    :attr:`numeric_decisions` counts the coefficients so decided to be zero.
+    leaves a non-number, the value at :attr:`digits` digits decides; a float
+    is zero below :attr:`float_tolerance` in absolute value.
+    :attr:`numeric_decisions` counts the coefficients decided zero numerically.
     """
 
-    def __init__(self, digits: int = 50) -> None:
+    def __init__(self, digits: int = 50, float_tolerance: float = 1e-9) -> None:
         self.digits = digits
+        self.float_tolerance = float_tolerance
         self.numeric_decisions = 0
 
     def __call__(self, c: se.Basic) -> bool:
         c = _clean(se.S(c))
         if c == 0:
             return True
+        if isinstance(c, se.RealDouble | se.ComplexDouble):
+            if abs(complex(c)) < self.float_tolerance:
+                self.numeric_decisions += 1
+                return True
+            return False
         if c.is_Number:
             return False
         value = sp.N(c._sympy_(), self.digits)
@@ -332,6 +339,7 @@ def weighted_jets(
     args: Sequence[Poly],
     weights: Sequence[int],
     degree: int,
+    numeric: bool = False,
 ) -> list[Poly]:
     r"""Weighted Taylor jets of ``exprs`` along the polynomial map $x = \varphi(y)$.
 
@@ -347,6 +355,8 @@ def weighted_jets(
         Weights of the $y$ variables.
     degree:
         Keep the terms of weighted degree ``<= degree``.
+    numeric:
+        Evaluate every coefficient to a float.
 
     Returns
     -------
@@ -365,6 +375,19 @@ def weighted_jets(
     t = se.Symbol("_nilpotent_t")
     ys = [se.Symbol(f"_nilpotent_y{k}") for k in range(nv)]
     tys = [t**w * y for w, y in zip(weights, ys, strict=True)]
+    base: dict[se.Symbol, se.Basic] = {}
+    if numeric:
+        # symengine's series does not expand around float constants: expand around
+        # symbols standing for the constant terms, then evaluate the coefficients.
+        moved = []
+        for k, a in enumerate(args):
+            c = a.value_at_zero()
+            if c != 0:
+                sym = se.Symbol(f"_nilpotent_p{k}")
+                base[sym] = c
+                a = a - Poly.constant(nv, c) + Poly.constant(nv, sym)
+            moved.append(a)
+        args = moved
     sub = {x: a.to_symengine(tys) for x, a in zip(xsyms, args, strict=True)}
     out: list[Poly] = []
     for e in exprs:
@@ -374,13 +397,17 @@ def weighted_jets(
             continue
         es = e.xreplace(sub) if sub else e
         if not es.has(t):
-            out.append(Poly.from_expr(es, ys))
+            out.append(Poly.from_expr(es.xreplace(base) if base else es, ys))
             continue
         pairs = se.series(es, t, n=degree + 1, as_deg_coef_pair=True)
         acc = Poly(nv)
         for deg, coef in pairs:
             if int(deg) > degree:
                 continue
+            if base:
+                coef = coef.xreplace(base)
             acc = acc + Poly.from_expr(coef, ys, ignore=(t,))
         out.append(acc.truncate(weights, degree))
+    if numeric:
+        out = [Poly(p.nvars, {m: c.n() for m, c in p.terms.items()}) for p in out]
     return out

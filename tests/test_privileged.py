@@ -1,0 +1,205 @@
+"""Privileged coordinates: computed orders re-derived with plain sympy, coordinate
+changes that break linear coordinates, singular points, errors."""
+
+from __future__ import annotations
+
+import hypothesis.strategies as st
+import pytest
+import sympy as sp
+from hypothesis import HealthCheck, given, settings
+
+from nilpotent.core.brackets import word_field
+from nilpotent.core.filtration import analyze
+from nilpotent.core.privileged import METHODS, privileged_coordinates
+from nilpotent.core.system import ControlSystem
+from nilpotent.errors import NotBracketGeneratingError, NotPrivilegedError, OptionError
+from nilpotent.models import get_model
+from polynomial_systems import change_coordinates, free_nilpotent, function_order, lie_derivative
+
+ALL_METHODS = ("auto", *METHODS)
+
+
+def engel_changed() -> ControlSystem:
+    """Engel in coordinates ``u3 = x3 + x1 x2``, ``u4 = x4 + x1² + x2 x3``.
+
+    The term ``x1²`` has order 2 < w4 = 3 and lies in the linear adapted ``z4``
+    direction, so linear adapted coordinates are not privileged (hand check:
+    ``X1 X1 u4 = 2`` at 0, a chain of length 2).
+    """
+    e = get_model("engel")
+    x1, x2, x3, _ = e.coordinates
+    return change_coordinates(e, [0, 0, x1 * x2, x1**2 + x2 * x3])
+
+
+def check_orders_with_sympy(sys: ControlSystem, coords) -> None:
+    """ord_p(y_j) = w_j for the forward expressions, by plain sympy chains."""
+    p = coords.point
+    for yj, wj in zip(coords.forward, coords.weights, strict=True):
+        assert function_order(sys.specialized_fields, sys.coordinates, yj, p, wj + 1) == wj
+
+
+@pytest.mark.parametrize("method", ALL_METHODS)
+@pytest.mark.parametrize(
+    "name", ["unicycle", "heisenberg", "engel", "cartan", "martinet", "car-trailers:2"]
+)
+def test_orders_equal_weights_recomputed(name, method):
+    sys = get_model(name)
+    coords = privileged_coordinates(sys, None, method)
+    assert coords.orders == coords.weights
+    check_orders_with_sympy(sys, coords)
+    assert all(
+        sp.simplify(e.xreplace(dict(zip(sys.coordinates, coords.point, strict=False)))) == 0
+        for e in coords.forward
+    )
+
+
+@pytest.mark.parametrize("method", ["algebraic", "exponential", "auto"])
+def test_linear_not_privileged_but_others_are(method):
+    sys = engel_changed()
+    with pytest.raises(NotPrivilegedError, match=r"y4 has order 2 but weight 3"):
+        privileged_coordinates(sys, None, "linear")
+    coords = privileged_coordinates(sys, None, method)
+    assert coords.method != "linear"
+    check_orders_with_sympy(sys, coords)
+
+
+def test_linear_coordinates_fail_the_sympy_check_too():
+    """Independent: the linear adapted z4 really has order 2 (sympy chains)."""
+    sys = engel_changed()
+    f = analyze(sys)
+    B = sp.Matrix(4, 4, lambda j, k: f.frame_values[k][j])
+    z = B.inv() * sp.Matrix(sys.coordinates)
+    assert function_order(sys.fields, sys.coordinates, z[3], (0,) * 4, 3) == 2
+
+
+def test_algebraic_inverse_is_exact_and_triangular():
+    sys = engel_changed()
+    c = privileged_coordinates(sys, None, "algebraic")
+    assert c.inverse_exact and c.forward_exact
+    back = [sp.expand(e.xreplace(dict(zip(c.names, c.forward, strict=False)))) for e in c.inverse]
+    assert back == list(sys.coordinates)
+    J = c.jacobian() * c.inverse_jacobian().xreplace(dict(zip(c.names, c.forward, strict=False)))
+    assert sp.simplify(J - sp.eye(4)) == sp.zeros(4)
+
+
+def _flow(field, coords, t, q, terms=6):
+    """exp(t X)(q) as the Lie series sum t^k/k! (X^k x)(q) (terminates for these fields)."""
+    cur = list(coords)
+    total = [sp.S(v) for v in q]
+    at = dict(zip(coords, q, strict=True))
+    for k in range(1, terms):
+        cur = [lie_derivative(field, c, coords) for c in cur]
+        total = [
+            a + t**k / sp.factorial(k) * c.xreplace(at) for a, c in zip(total, cur, strict=True)
+        ]
+    return [sp.expand(e) for e in total]
+
+
+@pytest.mark.parametrize("name", ["heisenberg", "engel"])
+def test_exponential_inverse_is_the_flow_composition(name):
+    """x(y) = exp(y_n Y_n)∘…∘exp(y_1 Y_1)(0), by Lie series of the (nilpotent) frame fields."""
+    sys = get_model(name)
+    c = privileged_coordinates(sys, None, "exponential")
+    f = c.filtration
+    q = [sp.Integer(0)] * sys.n
+    for word, y in zip(f.frame, c.names, strict=True):
+        q = _flow(word_field(sys, word), sys.coordinates, y, q)
+    assert [sp.expand(a - b) for a, b in zip(c.inverse, q, strict=True)] == [0] * sys.n
+
+
+@pytest.mark.parametrize("method", ALL_METHODS)
+def test_martinet_singular_point(method):
+    sys = get_model("martinet")
+    coords = privileged_coordinates(sys, None, method)
+    assert coords.weights == (1, 1, 3)
+    assert not coords.filtration.regular
+    check_orders_with_sympy(sys, coords)
+
+
+def test_regular_point_of_martinet_has_weights_1_1_2():
+    sys = get_model("martinet")
+    coords = privileged_coordinates(sys, (0, 1, 0))
+    assert coords.weights == (1, 1, 2)
+    check_orders_with_sympy(sys, coords)
+
+
+def test_trident_at_a_transcendental_point_uses_floats():
+    """At θ = 1/5 exact arithmetic would carry cos(1/5): floats, said in ``numeric``."""
+    sys = get_model("trident-snake")
+    p = (sp.Rational(1, 3), -1, sp.Rational(1, 5), sp.Rational(1, 2), 0, sp.Rational(-1, 4))
+    coords = privileged_coordinates(sys, p)
+    assert coords.numeric and coords.method == "linear" and coords.orders == (1, 1, 1, 2, 2, 2)
+    at = dict(zip(sys.coordinates, p, strict=True))
+    assert all(abs(float(e.xreplace(at))) < 1e-12 for e in coords.forward)
+    # dy/dx at p is the inverse of the frame matrix (frame values recomputed with sympy)
+    frame = [word_field(sys, w) for w in coords.filtration.frame]
+    B = sp.Matrix(6, 6, lambda j, k: frame[k][j].xreplace(at)).evalf(20)
+    J = coords.jacobian().xreplace(at).evalf(20)
+    assert max(abs(v) for v in (J * B - sp.eye(6))) < 1e-12
+
+
+def test_exact_rational_point_stays_exact():
+    sys = get_model("car-trailers:2")
+    coords = privileged_coordinates(sys, (1, sp.Rational(1, 2), 0, 0, 0))
+    assert not coords.numeric
+    check_orders_with_sympy(sys, coords)
+
+
+def test_errors():
+    with pytest.raises(OptionError, match="unknown privileged-coordinates method"):
+        privileged_coordinates(get_model("unicycle"), None, "bogus")
+    x1, x2, x3 = sp.symbols("x1 x2 x3")
+    flat = ControlSystem("flat", (x1, x2, x3), ((1, 0, 0), (0, 1, 0)))
+    with pytest.raises(NotBracketGeneratingError):
+        privileged_coordinates(flat)
+
+
+@pytest.mark.parametrize(("m", "r"), [(2, 3), (2, 4), (3, 2)])
+def test_free_systems_linear_privileged(m, r):
+    sys = free_nilpotent(m, r)
+    coords = privileged_coordinates(sys)
+    assert coords.method == "linear"
+    check_orders_with_sympy(sys, coords)
+
+
+# --- random triangular coordinate changes ---------------------------------------------------
+
+BASES = ["heisenberg", "engel", "cartan", "free-2-3", "martinet"]
+
+
+def base_system(name: str) -> ControlSystem:
+    return free_nilpotent(2, 3) if name == "free-2-3" else get_model(name)
+
+
+@st.composite
+def changed_systems(draw):
+    """A polynomial system pushed through a random triangular polynomial change of degree 2–3."""
+    name = draw(st.sampled_from(BASES))
+    sys = base_system(name)
+    x = sys.coordinates
+    shifts = [sp.Integer(0)]
+    for j in range(1, sys.n):
+        earlier = x[:j]
+        terms = draw(
+            st.lists(
+                st.tuples(
+                    st.integers(-2, 2).filter(bool),
+                    st.lists(st.sampled_from(range(j)), min_size=2, max_size=3),
+                ),
+                max_size=2,
+            )
+        )
+        shifts.append(sp.Add(*[c * sp.Mul(*[earlier[k] for k in ks]) for c, ks in terms]))
+    return name, change_coordinates(sys, shifts)
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(changed_systems(), st.sampled_from(["auto", "algebraic", "exponential"]))
+def test_random_changes_keep_growth_and_certificates(case, method):
+    name, sys = case
+    base = base_system(name)
+    f0, f1 = analyze(base), analyze(sys)
+    assert f1.growth_vector == f0.growth_vector  # a diffeomorphism fixing 0 keeps the growth vector
+    coords = privileged_coordinates(sys, None, method)
+    assert coords.orders == f1.weights
+    check_orders_with_sympy(sys, coords)
