@@ -319,6 +319,9 @@ def check_analysis(
     assert list(data["point"]) == names
     for c, v in zip(names, point, strict=True):
         assert is_zero(grammar(data["point"][c], exact=exact) - v), (c, data["point"][c], v)
+    for pname, pval in data.get("parameters", {}).items():
+        assert pname.isidentifier()
+        grammar(pval, exact=False)
     growth, bg = oracle_growth(fields, coords, point)
     assert all(type(g) is int for g in data["growth_vector"] + data["weights"])
     assert data["bracket_generating"] is bg
@@ -356,6 +359,10 @@ def check_approximation(data, coords, fields, point, *, method=None, exact=True)
     if method is not None:
         assert data["method"] == method
     priv = data["privileged"]
+    # where the product declares inexact arithmetic (values such as sin(1/3) at p), the
+    # coordinates may carry decimals: every property is then checked to FLOAT_TOL
+    if data.get("exact") is False or priv.get("numeric") is True:
+        exact = False
     ynames = priv["names"]
     assert len(ynames) == n and len(set(ynames)) == n
     assert all(isinstance(s, str) and s.isidentifier() for s in ynames)
@@ -409,6 +416,14 @@ def check_approximation(data, coords, fields, point, *, method=None, exact=True)
                     ser = sp.expand(sp.series(comp, t, 0, weights[j]).removeO())
                     low = sp.expand(ser - hat[i][j].subs(scale, simultaneous=True))
                     assert is_zero(low), (i, j, low)
+    # extra output fields_x (X̂ in model coordinates): (∂y/∂x)·X̂_x = X̂_y∘y
+    if "fields_x" in data and priv.get("inverse_exact"):
+        for i, comp in enumerate(data["fields_x"]):
+            vx = sp.Matrix([grammar(c, xmap, exact=exact) for c in comp])
+            lhs = J * vx
+            for j in range(n):
+                rhs = hat[i][j].subs(ysub, simultaneous=True)
+                assert is_zero(sp.simplify(lhs[j] - rhs)), ("fields_x", i, j)
     cert = data["certificate"]
     assert cert["orders"] == list(weights)
     assert cert["nilpotent_step"] == r
@@ -515,6 +530,7 @@ def test_unicycle_sheared_at_exact_point(cli, tmp_path):
     assert growth == (2, 3)
     assert data["point"]["b"] == "0"
     data = run_json(cli, "approximate", f, "--at", at_text)
+    assert data["exact"] is True   # algebraic values at p: exact arithmetic throughout
     check_approximation(data, coords, fields, point)
     # step 2: the default is the linear adapted coordinates (INTERFACE.md)
     assert data["method"] == "linear"
@@ -616,6 +632,7 @@ def test_martinet_mixed_singular_point(cli, tmp_path):
     assert growth == (2, 2, 3) and weights == (1, 1, 3)
     assert data["regular"] is False
     data = run_json(cli, "approximate", f, "--at", at_text)
+    assert data["exact"] is True
     check_approximation(data, coords, fields, point)
     # the same system at a regular point
     data = run_json(cli, "analyze", f, "--at", "b=1")
