@@ -28,7 +28,12 @@ import symengine as se
 import sympy as sp
 
 from nilpotent.core.filtration import Filtration
-from nilpotent.core.privileged import PrivilegedCoordinates, _Context, privileged_coordinates
+from nilpotent.core.privileged import (
+    PrivilegedCoordinates,
+    _Context,
+    coordinate_orders,
+    privileged_coordinates,
+)
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
     Poly,
@@ -423,11 +428,14 @@ def _pushforward_ok(
     return True
 
 
-def certify(approx: NilpotentApproximation) -> Certificate:
+def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -> Certificate:
     """Recompute every check of ``approx`` from its system, coordinates and fields.
 
     Works on any :class:`NilpotentApproximation`, also one modified with
     :func:`dataclasses.replace` (this is how the tests show each check can fail).
+    The orders of the coordinates are those computed when the coordinates were
+    built (``coordinates.orders``); ``recompute_orders`` computes them again from
+    the coordinates' polynomial maps.
     """
     coords = approx.coordinates
     w = coords.weights
@@ -444,8 +452,9 @@ def certify(approx: NilpotentApproximation) -> Certificate:
     rem = _remainder_orders(jets, hat, w, zero)
     push = _pushforward_ok(approx, hat, zero)
     ctx_zero = _Context.of(approx.filtration, approx.coordinates.numeric).zero
+    orders = coordinate_orders(coords) if recompute_orders else coords.orders
     return Certificate(
-        orders=coords.orders,
+        orders=tuple(orders),
         weights=w,
         homogeneous=homogeneous,
         nilpotent_step=nil_step,

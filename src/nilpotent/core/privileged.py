@@ -524,6 +524,14 @@ METHODS: dict[str, Callable[[_Context], Built]] = {
 accepted by :func:`privileged_coordinates` besides these."""
 
 
+def coordinate_orders(coords: PrivilegedCoordinates) -> tuple[int | float, ...]:
+    r"""Recompute $\mathrm{ord}_p(y_j)$ from the polynomial maps of ``coords`` (module doc)."""
+    ctx = _Context.of(coords.filtration, coords.numeric)
+    orders, _ = _certified_orders(ctx, coords.forward_poly, coords.inverse_poly)
+    assert orders is not None
+    return orders
+
+
 def needs_floats(filtration: Filtration) -> bool:
     """Whether exact arithmetic at the filtration's point would carry transcendental values.
 
