@@ -215,3 +215,35 @@ def input_at(segments: Sequence[Segment], t: float) -> np.ndarray:
             return seg.values(t - start)
         start += seg.duration
     return segments[-1].values(segments[-1].duration)
+
+
+def coefficients(segments: Sequence[Segment], harmonics: Sequence[int]) -> np.ndarray:
+    """The input coefficients as one vector: per segment, per input, ``constant``,
+    ``cos[0..K-1]``, ``sin[0..K-1]`` with ``K = harmonics[segment]`` (zero-padded)."""
+    out: list[float] = []
+    for seg, k in zip(segments, harmonics, strict=True):
+        for s in seg.inputs:
+            if s.harmonics > k:
+                raise OptionError(f"an input has {s.harmonics} harmonics, more than {k}")
+            cos = list(s.cos) + [0.0] * (k - len(s.cos))
+            sin = list(s.sin) + [0.0] * (k - len(s.sin))
+            out.extend([s.constant, *cos, *sin])
+    return np.array(out)
+
+
+def from_coefficients(
+    theta: np.ndarray, template: Sequence[Segment], harmonics: Sequence[int], m: int
+) -> list[Segment]:
+    """Inverse of :func:`coefficients`: segments with the durations and ω of ``template``."""
+    segs = []
+    pos = 0
+    for seg, k in zip(template, harmonics, strict=True):
+        inputs = []
+        for _ in range(m):
+            c = float(theta[pos])
+            cos = tuple(float(v) for v in theta[pos + 1 : pos + 1 + k])
+            sin = tuple(float(v) for v in theta[pos + 1 + k : pos + 1 + 2 * k])
+            inputs.append(InputSignal(c, cos, sin))
+            pos += 2 * k + 1
+        segs.append(Segment(seg.duration, seg.omega, tuple(inputs)))
+    return segs

@@ -52,7 +52,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from nilpotent.errors import PlanningError
-from nilpotent.planning.controls import InputSignal, Segment, constant_segment
+from nilpotent.planning.controls import (
+    InputSignal,
+    Segment,
+    coefficients,
+    constant_segment,
+    from_coefficients,
+)
 from nilpotent.planning.exact_flow import endpoint, endpoint_and_jacobian
 from nilpotent.planning.triangular import TriangularSystem
 
@@ -197,31 +203,8 @@ def _layout(segments: Sequence[Segment]) -> list[int]:
     return [max((s.harmonics for s in seg.inputs), default=0) for seg in segments]
 
 
-def _flatten(segments: Sequence[Segment], harmonics: Sequence[int]) -> np.ndarray:
-    out: list[float] = []
-    for seg, k in zip(segments, harmonics, strict=True):
-        for s in seg.inputs:
-            cos = list(s.cos) + [0.0] * (k - len(s.cos))
-            sin = list(s.sin) + [0.0] * (k - len(s.sin))
-            out.extend([s.constant, *cos, *sin])
-    return np.array(out)
-
-
-def _unflatten(
-    theta: np.ndarray, template: Sequence[Segment], harmonics: Sequence[int], m: int
-) -> list[Segment]:
-    segs = []
-    pos = 0
-    for seg, k in zip(template, harmonics, strict=True):
-        inputs = []
-        for _ in range(m):
-            c = theta[pos]
-            cos = tuple(theta[pos + 1 : pos + 1 + k])
-            sin = tuple(theta[pos + 1 + k : pos + 1 + 2 * k])
-            inputs.append(InputSignal(float(c), cos, sin))
-            pos += 2 * k + 1
-        segs.append(Segment(seg.duration, seg.omega, tuple(inputs)))
-    return segs
+_flatten = coefficients
+_unflatten = from_coefficients
 
 
 def _levenberg_marquardt(
