@@ -1,0 +1,164 @@
+"""Benchmark of `nilpotent.core.approximation.approximate` against a plain sympy route.
+
+Cases (all at the origin): ``trident-snake`` (body-velocity form),
+``trident-snake-paper`` (the paper's eq. (vf)), ``engel``, ``cartan``, and
+``car-trailers:K`` for K = 1..K_max (step K + 2).
+
+* ``nilpotent``: :func:`approximate` with the default method (``auto``: linear
+  adapted coordinates where their certificate passes, else Bellaïche's algebraic
+  ones) on a fresh copy of the system (empty caches), everything included:
+  ``analyze``, the privileged coordinates and the computed orders, the
+  approximation in y and in x, and the whole certificate (homogeneity, bracket
+  levels, growth vector at 0, remainder order, push-forward check).  Wall-clock
+  and CPU seconds (single thread).
+* ``sympy``: the plain route for the same (linear adapted) coordinates only,
+  without any certificate: the frame's fields by nested sympy brackets
+  ``DY·X − DX·Y`` (sympy ``diff``, no expansion), their values at 0 by
+  ``subs``, ``A = B^{-1}``, the fields in ``y`` by substituting
+  ``x = B y`` and multiplying by ``A``, then per component the weighted Taylor
+  part of degree ``w_j − 1`` by sympy ``series`` in ``t`` after
+  ``y_k → t^{w_k} y_k``.  It does less than ``nilpotent`` (no algebraic
+  correction where linear coordinates are not privileged, no certificate), so
+  the ratio understates the gain.  Run in a subprocess and stopped after
+  ``--timeout`` seconds (default 60); once a car-trailers case times out, larger
+  K are not run.
+
+Usage: ``PYTHONPATH=src python benchmarks/approximation.py [--max-k 6]
+[--timeout 60] [--markdown]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import time
+
+import sympy as sp
+
+from nilpotent.core.approximation import approximate
+from nilpotent.core.filtration import analyze
+from nilpotent.core.system import ControlSystem
+from nilpotent.models import get_model
+
+
+def fresh(name: str) -> ControlSystem:
+    s = get_model(name).specialized()
+    return ControlSystem(s.name, s.coordinates, s.fields, (), s.description)
+
+
+def sympy_route(name: str) -> int:
+    """The plain sympy route (see the module docstring); returns the number of nonzero terms."""
+    sys = fresh(name)
+    f = analyze(sys)  # only for the frame words and weights (cheap); fields recomputed below
+    x = sys.coordinates
+    n = sys.n
+    fields = [sp.Matrix(v) for v in sys.specialized_fields]
+    memo: dict = {}
+
+    def field(word):
+        if word in memo:
+            return memo[word]
+        if isinstance(word, int):
+            v = fields[word - 1]
+        else:
+            X, Y = field(word[0]), field(word[1])
+            v = Y.jacobian(x) * X - X.jacobian(x) * Y
+        memo[word] = v
+        return v
+
+    at0 = {c: 0 for c in x}
+    B = sp.Matrix.hstack(*[field(w).subs(at0) for w in f.frame])
+    A = B.inv()
+    y = sp.symbols(f"y1:{n + 1}")
+    t = sp.Symbol("t")
+    w = f.weights
+    sub = dict(zip(x, B * sp.Matrix(y), strict=True))
+    dil = {yk: t**wk * yk for yk, wk in zip(y, w, strict=True)}
+    count = 0
+    for v in fields:
+        vy = A * v.subs(sub)
+        for j in range(n):
+            e = vy[j].subs(dil)
+            s = sp.series(e, t, 0, w[j]).removeO()
+            part = sp.expand(s).coeff(t, w[j] - 1)
+            count += len(sp.Add.make_args(part)) if part != 0 else 0
+    return count
+
+
+def _worker(name: str, queue) -> None:
+    t0 = time.perf_counter()
+    sympy_route(name)
+    queue.put(time.perf_counter() - t0)
+
+
+def run_baseline(name: str, timeout: float) -> float | None:
+    ctx = mp.get_context("fork")
+    queue = ctx.Queue()
+    proc = ctx.Process(target=_worker, args=(name, queue))
+    proc.start()
+    proc.join(timeout)
+    if proc.is_alive():
+        proc.terminate()
+        proc.join()
+        return None
+    return queue.get() if not queue.empty() else None
+
+
+def time_nilpotent(name: str, repeat: int) -> tuple[float, float, object]:
+    best_wall, best_cpu, approx = float("inf"), float("inf"), None
+    for _ in range(repeat):
+        sys = fresh(name)
+        w0, c0 = time.perf_counter(), time.process_time()
+        approx = approximate(sys)
+        best_wall = min(best_wall, time.perf_counter() - w0)
+        best_cpu = min(best_cpu, time.process_time() - c0)
+    return best_wall, best_cpu, approx
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--max-k", type=int, default=6)
+    parser.add_argument("--timeout", type=float, default=60.0)
+    parser.add_argument("--markdown", action="store_true")
+    args = parser.parse_args()
+    cases = ["trident-snake", "trident-snake-paper", "engel", "cartan"]
+    cases += [f"car-trailers:{k}" for k in range(1, args.max_k + 1)]
+    header = (
+        "| case | step | method | nilpotent wall s | CPU s | certificate | sympy route s | ratio |"
+    )
+    print(header if args.markdown else header.replace("|", " ").strip())
+    if args.markdown:
+        print("|---|---|---|---|---|---|---|---|")
+    skip_baseline = False
+    last = ""
+    for name in cases:
+        repeat = 3 if not name.startswith("car-trailers") or int(name.split(":")[1]) <= 4 else 1
+        wall, cpu, a = time_nilpotent(name, repeat)
+        ran = not skip_baseline
+        base = run_baseline(name, args.timeout) if ran else None
+        if ran and base is None and name.startswith("car-trailers"):
+            skip_baseline = True
+        if not ran:
+            base_text, ratio = "not run", "–"
+        elif base is None:
+            base_text, ratio = f"> {args.timeout:.0f} (stopped)", f"> {args.timeout / wall:.0f}×"
+        else:
+            base_text, ratio = f"{base:.2f}", f"{base / wall:.0f}×"
+        cert = "ok" if a.certificate.ok else "FAILED: " + "; ".join(a.certificate.failures())
+        row = [
+            name,
+            str(a.filtration.step),
+            a.coordinates.method,
+            f"{wall:.3f}",
+            f"{cpu:.3f}",
+            cert,
+            base_text,
+            ratio,
+        ]
+        print("| " + " | ".join(row) + " |" if args.markdown else "  ".join(row), flush=True)
+        last = f"approximation: {name} {wall:.2f} s ({ratio} the sympy route)"
+    print(last)
+
+
+if __name__ == "__main__":
+    main()
