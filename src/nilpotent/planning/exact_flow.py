@@ -29,6 +29,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from nilpotent.errors import PlanningError
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.triangular import TriangularSystem
 
@@ -238,7 +239,7 @@ def endpoint_and_jacobian(
     start = 0
     for seg, k, size in zip(segments, harmonics, sizes, strict=True):
         if max((s.harmonics for s in seg.inputs), default=0) > k:
-            raise ValueError("segment has more harmonics than declared")
+            raise PlanningError(f"a segment has more harmonics than the {k} declared")
         padded = Segment(
             seg.duration,
             seg.omega,
