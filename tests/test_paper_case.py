@@ -218,6 +218,9 @@ def test_body_form_brackets_and_approximation():
     x = s.coordinates
     g = s.specialized_fields
     assert at0(s, sympy_bracket(g[0], g[1], x)) == [0, 0, 0, 1, 1, 1]
+    # the paper's printed g5, g6 are the φ-parts of these (∂x, ∂y parts dropped)
+    assert at0(s, sympy_bracket(g[1], g[2], x)) == [1, 0, 0, 0, R3, -R3]
+    assert at0(s, sympy_bracket(g[0], g[2], x)) == [0, -1, 0, 2, -1, -1]
     for i, j in ((0, 1), (0, 2), (1, 2)):
         assert at0(s, sympy_bracket(a.fields_x[i], a.fields_x[j], x)) == at0(
             s, sympy_bracket(g[i], g[j], x)
