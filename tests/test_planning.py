@@ -170,3 +170,13 @@ def test_shooting_refinement_finishes_a_truncated_plan():
     kinds = [it.kind for it in p.iterations]
     assert kinds[:2] == ["nilpotent", "nilpotent"] and set(kinds[2:]) == {"newton"}
     assert np.linalg.norm(resimulate(system, np.zeros(6), p.segments) - goal) <= 1e-8
+
+
+def test_not_bracket_generating_is_reported():
+    from nilpotent.core.system import ControlSystem
+    from nilpotent.errors import NotBracketGeneratingError
+
+    x, y, z = sp.symbols("x y z")
+    flat = ControlSystem("flat", (x, y, z), ((1, 0, 0), (0, 1, 0)))
+    with pytest.raises(NotBracketGeneratingError):
+        plan(flat, (0, 0, 0), (0.1, 0.1, 0.1), engine="scipy")
