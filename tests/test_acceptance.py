@@ -714,6 +714,24 @@ def test_not_bracket_generating(cli, tmp_path, which):
     assert "Traceback" not in err
 
 
+@pytest.mark.xfail(
+    reason="product bug: where the rank at p stays below n up to its bracket-length cutoff "
+    "but is n nearby, analyze answers exit 2 (kind not-bracket-generating, 'pass a larger "
+    "max_length') instead of the analysis; here every field vanishes on a = 0, so p is "
+    "provably not bracket-generating and the answer is growth_vector [0]",
+    strict=True,
+)
+def test_fields_vanishing_at_point(cli, tmp_path):
+    """X1 = a ∂a, X2 = a ∂b at 0: every bracket is a multiple of a (the line a = 0 is
+    invariant), so at p the brackets span {0} at every length: not bracket-generating."""
+    a, b = sp.symbols("a b")
+    fields = [(a, 0), (0, a)]
+    f = write_model(tmp_path / "vanish.toml", "vanish", (a, b), fields)
+    data = run_json(cli, "analyze", f)
+    check_analysis(data, (a, b), fields, [0, 0])
+    assert data["bracket_generating"] is False and data["growth_vector"] == [0]
+
+
 # ---------------------------------------------------------------------------------------------
 # (5) linear adapted coordinates are not privileged
 # ---------------------------------------------------------------------------------------------
