@@ -193,3 +193,10 @@ def test_word_field_matches_nested_sympy_brackets():
     lazy = word_values_at(sys2, [word], point)[0]
     exact = tuple(sp.nsimplify(sp.simplify(e.subs(subs))) for e in nested(word))
     assert all(sp.simplify(a - b) == 0 for a, b in zip(lazy, exact, strict=True))
+
+
+def test_word_field_returns_the_systems_own_symbols():
+    x, y, th = sp.symbols("x y theta", real=True)
+    uni = ControlSystem("unicycle", (x, y, th), ((sp.cos(th), sp.sin(th), 0), (0, 0, 1)))
+    field = word_field(uni, (1, (1, 2)))
+    assert set().union(*(e.free_symbols for e in field)) <= {th}

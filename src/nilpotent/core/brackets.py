@@ -231,6 +231,20 @@ def to_symengine(expr: sp.Basic | int) -> se.Basic:
     return se.S(expr)
 
 
+def to_sympy(sys: ControlSystem, expr: se.Basic) -> sp.Expr:
+    """Convert a symengine expression in the coordinates of ``sys`` back to sympy.
+
+    Symbols come back as the system's own coordinate symbols (with their
+    assumptions, which symengine does not keep).
+    """
+    value = sp.S(expr)
+    back = sys._cache.get("brackets.back")
+    if back is None:
+        back = {sp.Symbol(str(c)): c for c in sys.coordinates if c != sp.Symbol(str(c))}
+        sys._cache["brackets.back"] = back
+    return value.xreplace(back) if back else value
+
+
 def se_lie_derivative(field: SeField, f: se.Basic, coords: Sequence[se.Symbol]) -> se.Basic:
     """$Xf$ for a symengine field and function, expanded."""
     free = f.free_symbols
@@ -304,7 +318,7 @@ def word_field(sys: ControlSystem, word: Word) -> tuple[sp.Expr, ...]:
     cache: dict[Word, tuple[sp.Expr, ...]] = sys._cache.setdefault(_SYMPY_CACHE_KEY, {})
     hit = cache.get(word)
     if hit is None:
-        hit = tuple(sp.S(e) for e in word_field_symengine(sys, word))
+        hit = tuple(to_sympy(sys, e) for e in word_field_symengine(sys, word))
         cache[word] = hit
     return hit
 

@@ -55,6 +55,7 @@ from nilpotent.core.brackets import (
     is_built,
     se_coordinates,
     to_symengine,
+    to_sympy,
     word_field_symengine,
     word_length,
     word_values_at,
@@ -624,4 +625,4 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
         )
     cols = [word_field_symengine(sys, w) for w in f.frame]
     mat = se.DenseMatrix(sys.n, sys.n, [cols[k][j] for j in range(sys.n) for k in range(sys.n)])
-    return sp.S(se.expand(mat.det()))
+    return to_sympy(sys, se.expand(mat.det()))
