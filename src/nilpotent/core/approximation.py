@@ -13,7 +13,8 @@ $[\hat X_i]_x(x) = (\partial x/\partial y)(y(x))\,[\hat X_i]_y(y(x))$; for the
 ``linear`` and ``algebraic`` coordinates both maps are polynomial and exact,
 so ``fields_x`` is exact (polynomials in $x - p$).  For ``exponential``
 coordinates the forward map is a truncated series and so is ``fields_x``
-(terms of ordinary degree $> r$ in $x - p$ dropped).
+(terms of degree $> r$ in $z = A(x - p)$ dropped, $z_k$ counting its
+order: the dropped part is a vector field of order $\ge 1$).
 
 The :class:`Certificate` is computed, never assumed (see :func:`certify`).
 Bracket convention $[X,Y] = DY\cdot X - DX\cdot Y$.
@@ -32,6 +33,7 @@ from nilpotent.core.privileged import (
     PrivilegedCoordinates,
     _Context,
     coordinate_orders,
+    exponential_grading,
     privileged_coordinates,
 )
 from nilpotent.core.system import ControlSystem
@@ -226,6 +228,11 @@ class NilpotentApproximation:
         ]
         for y, e in zip(coords.names, coords.forward, strict=True):
             lines.append(f"  {y} = {e}")
+        if coords.numeric:
+            lines.append(
+                "coefficients: floating point (15 digits): the values at the point are "
+                "transcendental, exact arithmetic would not simplify"
+            )
         lines.append("approximation in y:")
         lines += _field_lines(self.fields, coords.names)
         lines.append(
@@ -480,24 +487,25 @@ def _pushforward(
     ctx = _Context.of(coords.filtration, coords.numeric)
     n = coords.n
     exact = coords.forward_exact and coords.inverse_exact
-    ones = [1] * n
+    omega = exponential_grading(coords.weights, coords.inverse_poly)  # ord(z_k), privileged.py
     top = None if exact else ctx.step
     fwd = coords.forward_poly
     dchi = [
-        [coords.inverse_poly[k].diff(l).compose(fwd, ones, top) for l in range(n)] for k in range(n)
+        [coords.inverse_poly[k].diff(l).compose(fwd, omega, top) for l in range(n)]
+        for k in range(n)
     ]
     d = [Poly.variable(n, k) for k in range(n)]
     lin = ctx.apply_A(d)
     shifts = [c - p if p != 0 else c for c, p in zip(coords.system.coordinates, ctx.p, strict=True)]
     out = []
     for h in hat:
-        hz = [c.compose(fwd, ones, top) for c in h]
+        hz = [c.compose(fwd, omega, top) for c in h]
         vz = []
         for k in range(n):
             acc = Poly(n)
             for l in range(n):
                 if dchi[k][l].terms and hz[l].terms:
-                    acc = acc + dchi[k][l].mul(hz[l], ones, top)
+                    acc = acc + dchi[k][l].mul(hz[l], omega, top)
             vz.append(acc)
         vx = []
         for k in range(n):
@@ -506,7 +514,7 @@ def _pushforward(
                 b = ctx.Bse[k][l]
                 if b != 0 and vz[l].terms:
                     acc = acc + vz[l].scale(b)
-            vx.append(acc.compose(lin, ones, top).drop_zeros(ctx.zero).to_sympy(shifts))
+            vx.append(acc.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts))
         out.append(tuple(vx))
     return tuple(out), exact
 

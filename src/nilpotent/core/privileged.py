@@ -30,8 +30,11 @@ Methods (registry :data:`METHODS`)
         \exp(y_1Y_1)(p)$, the flows expanded as weighted Taylor series and
         truncated at weighted degree $r$ (the step), which is all the nilpotent
         approximation and its certificate see.  The forward map $y(x)$ is the
-        series inverse, $y_j$ kept to ordinary degree $w_j + 1$ in $x - p$
-        (the dropped terms have order $> w_j + 1$).
+        series inverse, $y_j$ kept to degree $r + w_j$ in $z$ where $z_k$
+        counts its order $\omega_k$ (the weighted order of $z_k = \chi_k(y)$),
+        so the dropped terms have order $> r + w_j$: enough for the
+        certificate (which needs $> w_j + 1$) and for pushing the
+        approximation forward (composites $G(y(x))$ right to order $r$).
     ``"auto"``
         The cheapest privileged one: ``linear`` when its certificate passes,
         else ``algebraic``.
@@ -101,8 +104,8 @@ class PrivilegedCoordinates:
         Whether ``forward`` is exact (false for ``exponential``, a truncated
         series inverse).
     forward_order:
-        For ``exponential``: $y_j$ is kept to ordinary degree $w_j +$
-        ``forward_order`` in $x - p$.
+        For ``exponential``: $y_j$ is kept to degree $w_j +$ ``forward_order``
+        in $z = A(x - p)$, $z_k$ counting its order $\omega_k$ (module doc).
     numeric:
         Whether the coefficients are floating-point numbers (15 digits) instead
         of exact numbers (see :func:`privileged_coordinates`).
@@ -494,25 +497,34 @@ def _algebraic(ctx: _Context) -> Built:
     return tuple(forward), tuple(inverse), True, None, True, None
 
 
+def exponential_grading(weights: Sequence[int], chi: Sequence[Poly]) -> list[int]:
+    r"""Orders $\omega_k$ of the linear adapted $z_k$: the weighted orders of $z_k = \chi_k(y)$."""
+    return [min(weighted_degree(m, weights) for m in c.terms) for c in chi]
+
+
 def _exponential(ctx: _Context) -> Built:
     n, w = ctx.n, ctx.weights
     r = max(w)
     E = _exponential_map(ctx, r)
     zE = ctx.apply_A([e - Poly.constant(n, to_symengine(p)) for e, p in zip(E, ctx.p, strict=True)])
-    ones = [1] * n
-    top = r + 1
+    # Truncation grading: z_k counts its order ω_k, the weighted order of χ_k(y) in the
+    # privileged y (computed); a dropped monomial z^β has order >= Σ β_k ω_k.  y_m is kept
+    # to ω-degree r + w_m: then the composites G(ψ(z)) used by the push-forward of the
+    # approximation are right to order r (a ∂/∂y_m costs at most w_m).
+    omega = exponential_grading(w, zE)
+    top = 2 * r
     nonlinear = [zE[j] - Poly.variable(n, j) for j in range(n)]  # χ(y) − y
     y = list(_identity(n))
     for _ in range(top):
         new = [
-            (Poly.variable(n, j) - nonlinear[j].compose(y, ones, top)).truncate(ones, top)
+            (Poly.variable(n, j) - nonlinear[j].compose(y, omega, top)).truncate(omega, top)
             for j in range(n)
         ]
         if all(a.terms == b.terms for a, b in zip(new, y, strict=True)):
             break
         y = new
-    forward = tuple(y[j].truncate(ones, w[j] + 1) for j in range(n))
-    return forward, tuple(zE), False, r, False, 1
+    forward = tuple(y[j].truncate(omega, r + w[j]) for j in range(n))
+    return forward, tuple(zE), False, r, False, r
 
 
 METHODS: dict[str, Callable[[_Context], Built]] = {
