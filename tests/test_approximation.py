@@ -159,7 +159,7 @@ def fields_in_y_by_sympy(sys: ControlSystem, a) -> list[list[sp.Expr]]:
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(changed(), st.sampled_from(["auto", "algebraic"]))
+@given(changed(), st.sampled_from(["auto", "algebraic", "exponential"]))
 def test_changed_systems(case, method):
     name, sys = case
     a = approximate(sys, None, method)
@@ -267,6 +267,21 @@ def test_outputs():
     assert s.coordinates == a.names and s.fields == a.fields
     with pytest.raises(OptionError):
         a.as_system("z")
+
+
+def test_numeric_on_request_matches_exact():
+    sys = get_model("trident-snake")
+    exact, flt = approximate(sys), approximate(sys, numeric=True)
+    assert not exact.coordinates.numeric and flt.coordinates.numeric
+    assert flt.certificate.ok and not flt.certificate.exact and "floating point" in str(flt)
+    for fe, ff in zip(exact.fields, flt.fields, strict=True):
+        for a, b in zip(fe, ff, strict=True):
+            diff = sp.expand(a - b)
+            assert (
+                all(abs(c) < 1e-12 for c in sp.Poly(diff, *exact.names).coeffs())
+                if diff != 0
+                else True
+            )
 
 
 def test_methods_registry_and_unknown_method():

@@ -260,15 +260,18 @@ class NilpotentApproximation:
 def _field_lines(fields: Sequence[Sequence[sp.Expr]], coords: Sequence[sp.Symbol]) -> list[str]:
     out = []
     for i, f in enumerate(fields, start=1):
-        terms = []
+        text = ""
         for e, c in zip(f, coords, strict=True):
             if e == 0:
                 continue
-            if e == 1 or e == -1:
-                terms.append(f"{'-' if e == -1 else ''}∂{c}")
+            negative = e.could_extract_minus_sign()
+            a = -e if negative else e
+            term = f"∂{c}" if a == 1 else (f"({a})·∂{c}" if isinstance(a, sp.Add) else f"{a}·∂{c}")
+            if text:
+                text += (" − " if negative else " + ") + term
             else:
-                terms.append(f"({e})∂{c}" if isinstance(e, sp.Add) else f"{e}·∂{c}")
-        out.append(f"  X̂{i} = " + (" + ".join(terms) or "0"))
+                text = ("−" if negative else "") + term
+        out.append(f"  X̂{i} = " + (text or "0"))
     return out
 
 
@@ -523,6 +526,8 @@ def approximate(
     sys: ControlSystem,
     point: Sequence[object] | None = None,
     method: str = "auto",
+    *,
+    numeric: bool | None = None,
 ) -> NilpotentApproximation:
     r"""The nilpotent approximation of ``sys`` at ``point``, with its computed certificate.
 
@@ -535,6 +540,11 @@ def approximate(
     method:
         Privileged coordinates: ``"auto"`` (linear where privileged, else
         algebraic), ``"linear"``, ``"algebraic"`` or ``"exponential"``.
+    numeric:
+        ``True`` for floating-point coefficients, ``False`` for exact ones,
+        ``None`` (default) for exact unless the values at the point are
+        transcendental (see :func:`~nilpotent.core.privileged.privileged_coordinates`);
+        ``coordinates.numeric`` and the printed output say which.
 
     Returns
     -------
@@ -557,7 +567,7 @@ def approximate(
     >>> a.certificate.ok
     True
     """
-    coords = privileged_coordinates(sys, point, method)
+    coords = privileged_coordinates(sys, point, method, numeric=numeric)
     w = coords.weights
     ctx = _Context.of(coords.filtration, coords.numeric)
     jets = coords.field_jets(extra=1)
