@@ -5,8 +5,8 @@ Methods (registry :data:`METHODS`), engines (:data:`ENGINES`):
 ============  ==========================  =====================================
 method        engines                     accuracy reported (``tolerance``)
 ============  ==========================  =====================================
-``adaptive``  ``numba``, ``scipy``        ``rtol``: every accepted step had its
-                                          local error ≤ ``atol + rtol·|x|``
+``adaptive``  ``numba``, ``scipy``,       ``rtol``: every accepted step had its
+              ``heyoka``                  local error ≤ ``atol + rtol·|x|``
 ``fixed``     ``numba``, ``numpy``        step-halving (Richardson) estimate of
                                           the global error, max over the batch
 ============  ==========================  =====================================
@@ -14,6 +14,9 @@ method        engines                     accuracy reported (``tolerance``)
 * ``numba``: the DOP853 kernels of :mod:`nilpotent.numeric.kernels`, compiled
   into the system's cached module, ``prange`` over the batch;
 * ``numpy``: the same fixed-step DOP853 vectorised over the batch;
+* ``heyoka`` (optional extra, ``pip install heyoka``): heyoka's adaptive
+  Taylor method in SIMD batches (:mod:`nilpotent.numeric.heyoka_engine`;
+  tolerance ``min(rtol, atol)``, no ``min_step``); never chosen by ``auto``;
 * ``scipy``: :func:`scipy.integrate.solve_ivp` (``DOP853``) trajectory by
   trajectory, the reference; it also accepts inputs given as a Python function
   of ``t`` (:func:`solve_function_input`);
@@ -47,8 +50,8 @@ METHODS: dict[str, str] = {
     "adaptive": "DOP853 with embedded error control (scipy's step-size rules)",
     "fixed": "DOP853 with equal steps per segment; error estimated by step halving",
 }
-ENGINES = ("auto", "numba", "numpy", "scipy")
-_SUPPORTED = {"adaptive": ("numba", "scipy"), "fixed": ("numba", "numpy")}
+ENGINES = ("auto", "numba", "numpy", "scipy", "heyoka")
+_SUPPORTED = {"adaptive": ("numba", "scipy", "heyoka"), "fixed": ("numba", "numpy")}
 
 #: ``engine="auto"`` compiles numba kernels from this batch size on (below it
 #: only when they are already cached).
@@ -190,13 +193,15 @@ def integrate(
     max_steps:
         Most steps (accepted + rejected) per trajectory.
     min_step:
-        Smallest step of the adaptive method (default ``1e-13 ×`` duration).
+        Smallest step of the adaptive method (default ``1e-13 ×`` duration);
+        numba only (scipy and heyoka have none).
     bound:
         A trajectory with some ``|x_k| > bound`` is stopped (:attr:`Status.BLOW_UP`).
     estimate_error:
         For ``fixed``: also integrate with ``steps/2`` to estimate the error.
     threads:
-        Number of numba threads (default: numba's setting).
+        Number of numba threads (default: numba's setting), or of threads
+        running heyoka's SIMD batches (default: the usable cores).
     """
     if method not in METHODS:
         raise OptionError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
@@ -226,7 +231,7 @@ def integrate(
     )
     with _numba_threads(threads if chosen == "numba" else None):
         final, samples, info, err, tolerance = _solve(
-            system, xs, sig, ts, method, chosen, int(steps), estimate_error, common
+            system, xs, sig, ts, method, chosen, int(steps), estimate_error, common, threads
         )
     return BatchSolution(
         method=method,
@@ -272,10 +277,18 @@ def _solve(
     steps: int,
     estimate_error: bool,
     common: dict[str, Any],
+    threads: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
     batch = xs.shape[0]
     if chosen == "scipy":
         final, samples, info = _run_scipy(system, xs, sig, ts, **common)
+    elif chosen == "heyoka":
+        from nilpotent.numeric.heyoka_engine import run_heyoka
+
+        final, samples, info = run_heyoka(
+            system, xs, sig, ts, rtol=common["rtol"], atol=common["atol"],
+            max_steps=common["max_steps"], bound=common["bound"], threads=threads,
+        )
     elif chosen == "numba":
         final, samples, info = _run_numba(system, xs, sig, ts, method == "adaptive", steps,
                                           **common)
