@@ -18,7 +18,7 @@ from nilpotent.core.system import ControlSystem
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import numba_available
 from nilpotent.numeric.inputs import HarmonicInputs
-from nilpotent.numeric.integrators import integrate
+from nilpotent.numeric.integrators import integrate, kernels_cached
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
 
@@ -49,18 +49,22 @@ def harmonic_inputs(batch: Sequence[Sequence[Segment]]) -> HarmonicInputs:
     return HarmonicInputs(durations, omegas, constant, cos, sin)
 
 
-#: Integration engines: ``"numba"`` (compiled DOP853; the first use of a model
-#: compiles its kernels, about 10 s, cached on disk), ``"scipy"`` (solve_ivp
-#: DOP853, no compilation, slower per trajectory), ``"auto"`` (numba when
-#: installed).
+#: Integration engines: ``"numba"`` (compiled DOP853, about 1 ms per trajectory;
+#: the first use of a model compiles its kernels, about 10 s, cached on disk),
+#: ``"scipy"`` (solve_ivp DOP853, no compilation, about 50 ms per segment),
+#: ``"auto"`` (numba when its kernels for the system are already cached, else
+#: scipy: one plan costs less than a compilation).
 ENGINES = ("auto", "numba", "scipy")
 
 
-def _engine(engine: str) -> str:
+def _engine(engine: str, system: ControlSystem) -> str:
     if engine not in ENGINES:
         raise OptionError(f"unknown engine {engine!r} (choose from {', '.join(ENGINES)})")
+    if engine == "numba" and not numba_available():
+        raise OptionError("the numba engine needs numba installed")
     if engine == "auto":
-        return "numba" if numba_available() else "scipy"
+        cached = numba_available() and kernels_cached(compiled_system(system))
+        return "numba" if cached else "scipy"
     return engine
 
 
@@ -84,7 +88,7 @@ def simulate_candidates(
         inputs = harmonic_inputs([candidates[i] for i in idxs])
         sol = integrate(
             compiled, np.repeat(x[None, :], len(idxs), axis=0), inputs,
-            engine=_engine(engine), rtol=RTOL, atol=ATOL,
+            engine=_engine(engine, system), rtol=RTOL, atol=ATOL,
         )
         final = np.array(sol.final)
         final[~sol.ok] = np.nan
@@ -112,7 +116,7 @@ def simulate_path(
     times = times[times <= starts[-1]]
     sol = integrate(
         compiled_system(system), np.asarray(x0, dtype=float), harmonic_inputs([segments]),
-        engine=_engine(engine), rtol=RTOL, atol=ATOL, times=times,
+        engine=_engine(engine, system), rtol=RTOL, atol=ATOL, times=times,
     )
     if not sol.all_ok:
         raise IntegrationError(
