@@ -235,3 +235,25 @@ def test_segment_integral_matches_quadrature(c, a, b, duration, omega):
     f = sig.value(t, omega)
     quad = float(np.sum((f[1:] + f[:-1]) * np.diff(t)) / 2)
     assert sig.integral(duration, omega) == pytest.approx(quad, abs=1e-6)
+
+
+def test_bracket_loop_convention_of_docs_conventions():
+    """``u1 = −Aω sin ωt, u2 = Aω cos ωt`` over one period moves Heisenberg by ``πA²[X1,X2]``."""
+    system, _ = heisenberg()
+    amp, omega = 0.3, 1.7
+    seg = Segment(2 * math.pi / omega, omega, (InputSignal(0, (), (-amp * omega,)),
+                                               InputSignal(0, (amp * omega,), ())))
+    assert np.allclose(endpoint(system, np.zeros(3), [seg]), [0, 0, math.pi * amp**2],
+                       atol=1e-14)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    start=st.lists(st.floats(-1, 1), min_size=6, max_size=6),
+    goal=st.lists(st.floats(-1, 1), min_size=6, max_size=6),
+)
+def test_step2_steering_exact_for_any_start_and_goal(start, goal):
+    system, _ = trident_like()
+    result = steer_nilpotent(system, start, goal)
+    assert result.error <= 1e-12 * max(1.0, max(abs(g) for g in goal))
+    assert np.allclose(endpoint(system, start, result.segments), goal, atol=1e-11)
