@@ -51,7 +51,7 @@ ANCHORS = ("current", "goal", "start")
 #: Relative finite-difference step of the shooting refinement's Jacobian.
 FD_STEP = 1e-7
 #: Most Newton steps of the shooting refinement.
-REFINE_STEPS = 10
+REFINE_STEPS = 20
 
 #: Dilation factors tried, in order, when the full nilpotent step does not reduce the error.
 DAMPING = (1.0, 0.5, 0.25, 0.125, 0.0625)
@@ -473,12 +473,15 @@ def plan(
         )
 
     if refine and error > tol and segments:
+        before = error
         segments, x, error, more = _refine(system, x0, segments, xg, tol, engine)
         history.extend(more)
         if error <= tol:
             failure = ""
-        elif not failure:
-            failure = f"the shooting refinement stalled at {error:.3g}"
+        else:
+            failure = (
+                f"{failure}; the shooting refinement then went from {before:.3g} to {error:.3g}"
+            )
     times, states = simulate_path(system, x0, segments, trajectory_points, engine)
     result = Plan(
         system=system,
