@@ -193,3 +193,16 @@ def test_growth_vector_invariant_under_coordinate_changes(entries, a, b, which):
     assert f.growth_vector == ref.growth_vector
     assert f.regular == ref.regular
     assert f.weights == ref.weights
+
+
+@pytest.mark.parametrize(
+    "third", [x2 * sp.atan2(x2, 2), sp.sqrt(1 + x2**2), sp.cosh(x2)]
+)
+def test_martinet_like_fields_with_other_functions(third):
+    # third = 1 or 0 + x2**2/2 + O(x2**4) (Taylor by hand), so at 0 the filtration is
+    # Martinet's: [X1,X2] = -d/dx2 X1 vanishes at 0, [X2,[X1,X2]](0) = (0, 0, -1).
+    sys = ControlSystem("martinet-like", (x1, x2, x3), ((1, 0, third), (0, 1, 0)))
+    f = analyze(sys)
+    assert f.growth_vector == (2, 2, 3) and not f.regular
+    assert f.generic_growth_vector == (2, 3)
+    assert f.frame_values[2] == (0, 0, -1)

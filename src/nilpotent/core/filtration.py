@@ -259,10 +259,14 @@ def _random_points(point: Sequence[sp.Expr], count: int) -> list[list[sp.Expr]]:
 
 
 def _as_float(v: se.Basic) -> float:
+    """A real double from a symengine number (``atan2`` of doubles needs ``n()``)."""
     try:
         c = complex(v)
-    except (TypeError, RuntimeError, ValueError) as exc:
-        raise _Undefined from exc
+    except (TypeError, RuntimeError, ValueError):
+        try:
+            c = complex(v.n(53, real=True))
+        except (TypeError, RuntimeError, ValueError) as exc:
+            raise _Undefined from exc
     if not math.isfinite(c.real) or c.imag != 0:
         raise _Undefined
     return c.real
