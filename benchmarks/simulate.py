@@ -8,7 +8,9 @@ amplitudes ``A ∈ [0.01, 0.3]`` and random start points ``|q0_k| ≤ 0.1``:
     in a Python loop with a sympy-``lambdify`` right-hand side; timed on a subset
     and extrapolated (the script says so);
 (b) ours: :func:`nilpotent.numeric.integrate` (``engine="auto"`` → numba,
-    adaptive DOP853 at the same tolerances) over the whole batch.
+    adaptive DOP853 at the same tolerances) over the whole batch;
+(b2) the same with ``engine="heyoka"`` (Taylor method in SIMD batches; only
+    where heyoka is installed), with its own fresh-process start-up.
 
 Both end points are checked against a tight reference (solve_ivp at rtol 1e-13
 on a subset): the batched engine must be within 1e-9.  (c) repeats (b) at rtol
@@ -39,6 +41,8 @@ cs = compile_system(get_model("trident-snake"))
 r = integrate(cs, np.zeros((2, 6)), bracket_inputs(3, 1, 2, [0.1, 0.2]), engine="auto")
 print(time.perf_counter() - t0, time.process_time(), r.engine)
 """
+
+STARTUP_HEYOKA = STARTUP.replace('engine="auto"', 'engine="heyoka"')
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -132,6 +136,7 @@ def main(argv: list[str] | None = None) -> None:
         f"({args.n / cpu_loose:,.0f} per CPU-second), end-point error {err_loose:.2e} "
         f"(within 1e-9: {'yes' if err_loose <= 1e-9 else 'NO'}); not used for the ratio below"
     )
+    heyoka_line(compiled, x0, inputs, ref, nref, nb / cpu_base, rate_base, args.threads)
     err_base = np.abs(base_final[: min(nb, nref)] - ref[: min(nb, nref)]).max()
     print(
         f"max end-point error vs solve_ivp rtol=1e-13 on {nref}: ours {err_ours:.2e}, "
@@ -149,8 +154,54 @@ def main(argv: list[str] | None = None) -> None:
     startup, startup_cpu, engine = out.stdout.split()
     print(f"start-up (imports + cached kernels + 2 trajectories, fresh process): "
           f"{float(startup):.2f} s wall, {float(startup_cpu):.2f} s CPU (engine {engine})")
+    from nilpotent.numeric.heyoka_engine import heyoka_available
+
+    if heyoka_available():
+        out = subprocess.run([sys.executable, "-c", STARTUP_HEYOKA], capture_output=True,
+                             text=True, env=env, check=True)
+        startup, startup_cpu, engine = out.stdout.split()
+        print(f"start-up with engine=heyoka (imports + compile, heyoka's on-disk cache, "
+              f"fresh process): {float(startup):.2f} s wall, {float(startup_cpu):.2f} s CPU")
     print("note: the machine is shared; timings are noisy")
     print(f"simulate: {rate_ours:.0f} trajectories/s, {rate_ours / rate_base:.0f}x solve_ivp")
+
+
+def heyoka_line(compiled, x0, inputs, ref, nref, base_per_cpu, rate_base, threads) -> None:
+    """(b2): the heyoka engine on the same workload, if heyoka is installed."""
+    from nilpotent.numeric import integrate
+    from nilpotent.numeric.heyoka_engine import heyoka_available
+
+    if not heyoka_available():
+        print("(b2) heyoka engine: heyoka is not installed (pip install heyoka), skipped")
+        return
+    import heyoka
+
+    t0 = time.perf_counter()
+    integrate(compiled, x0[:8], _first(inputs, 8), engine="heyoka", threads=threads)
+    t_compile = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    res = integrate(compiled, x0, inputs, engine="heyoka", rtol=1e-10, atol=1e-12,
+                    threads=threads)
+    t_hy = time.perf_counter() - t0
+    cpu_hy = time.process_time() - c0
+    n = x0.shape[0]
+    err = np.abs(res.final[:nref] - ref).max()
+    print(
+        f"(b2) engine=heyoka {heyoka.__version__} (Taylor, SIMD batch "
+        f"{heyoka.recommended_simd_size()}, tol min(rtol, atol) = 1e-12): {n} trajectories in "
+        f"{t_hy:.3f} s -> {n / t_hy:,.0f} trajectories/s, {n / cpu_hy:,.0f} per CPU-second "
+        f"({(n / cpu_hy) / base_per_cpu:.0f}x solve_ivp per CPU-second, "
+        f"{(n / t_hy) / rate_base:.0f}x wall); mean steps {res.steps.mean():.1f}; all ok: "
+        f"{res.all_ok}; end-point error {err:.2e}; first call (compile or load) {t_compile:.2f} s"
+    )
+
+
+def _first(inputs, k: int):
+    from nilpotent.numeric import HarmonicInputs
+
+    return HarmonicInputs(inputs.durations[:k], inputs.omegas[:k], inputs.constant[:k],
+                          inputs.cos[:k], inputs.sin[:k])
 
 
 if __name__ == "__main__":

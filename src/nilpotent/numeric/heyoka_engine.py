@@ -12,13 +12,14 @@ parameters:
 
 .. math::
 
-    u_i(t) = a_i + \\sum_{k=1}^{K} b_{i,k} \\cos(k ω (t − t_0)) + c_{i,k} \\sin(k ω (t − t_0)),
+    u_i(τ) = a_i + \\sum_{k=1}^{K} b_{i,k} \\cos(k ω τ) + c_{i,k} \\sin(k ω τ),
 
-parameters ``par[0] = ω``, ``par[1] = t_0`` (start of the current segment),
-then ``a_i, b_{i,1}, c_{i,1}, …, b_{i,K}, c_{i,K}`` for ``i = 1..m``.  Time is
-global; at the end of each segment the parameters of the next segment are
-loaded, so one compiled integrator serves every batch of inputs with ``K``
-harmonics, any number of segments, and per-trajectory durations.
+parameters ``par[0] = ω``, then ``a_i, b_{i,1}, c_{i,1}, …, b_{i,K}, c_{i,K}``
+for ``i = 1..m``.  The integrator's time is the local time ``τ`` of the
+segment: at the end of each segment the lane's time is reset to 0 and the
+parameters of the next segment are loaded, so one compiled integrator serves
+every batch of inputs with ``K`` harmonics, any number of segments, and
+per-trajectory durations.
 
 Accuracy: heyoka keeps the local error of each step below
 ``tol · max(1, ‖x‖∞)``; the engine uses ``tol = min(rtol, atol)`` (``rtol``
@@ -42,7 +43,6 @@ from __future__ import annotations
 
 import copy
 import importlib.util
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from types import ModuleType
@@ -114,11 +114,11 @@ def _rhs(system: CompiledSystem, harmonics: int) -> tuple[list[tuple[Any, Any]],
     hv = list(hv) if n > 1 else [hv]
     qs = sp.symbols(f"q0:{n}", real=True)
     smap = {qs[k]: hv[k] for k in range(n)}
-    tau = hy.time - hy.par[1]
+    tau = hy.time
     cosk = [hy.cos(k * hy.par[0] * tau) for k in range(1, harmonics + 1)]
     sink = [hy.sin(k * hy.par[0] * tau) for k in range(1, harmonics + 1)]
     inputs = []
-    idx = 2
+    idx = 1
     for _ in range(m):
         terms = [hy.par[idx]]
         idx += 1
@@ -159,13 +159,12 @@ def taylor_integrator(system: CompiledSystem, harmonics: int, tol: float) -> Tay
 def _parameters(sig: HarmonicInputs) -> np.ndarray:
     """``(B, S, npar)`` runtime parameters of every segment (layout of the module docstring)."""
     b, s, m, k = sig.cos.shape
-    starts = np.concatenate([np.zeros((b, 1)), np.cumsum(sig.durations, axis=1)[:, :-1]], 1)
     per_input = np.empty((b, s, m, 1 + 2 * k))
     per_input[..., 0] = sig.constant
     per_input[..., 1::2] = sig.cos
     per_input[..., 2::2] = sig.sin
     return np.concatenate(
-        [sig.omegas[..., None], starts[..., None], per_input.reshape(b, s, m * (1 + 2 * k))],
+        [sig.omegas[..., None], per_input.reshape(b, s, m * (1 + 2 * k))],
         axis=2,
     )
 
@@ -186,8 +185,10 @@ def run_heyoka(
 
     ``final`` ``(B, n)``; ``samples`` ``(B, T, n)`` at the global times ``ts``
     (NaN past a stop); ``info`` ``(B, 4)``: status code, steps, rejected steps
-    (0), error estimate (NaN).  ``threads`` SIMD batches run at once (default:
-    the usable cores), each thread on its own copy of the integrator.
+    (0), error estimate (NaN).  ``threads`` SIMD batches run at once, each
+    thread on its own copy of the integrator (default 1: heyoka releases the
+    GIL while it integrates, but the Python work between batches does not, and
+    two threads measured no faster than one).
     """
     integ = taylor_integrator(system, sig.harmonics, heyoka_tolerance(rtol, atol))
     batch, n = xs.shape
@@ -206,17 +207,19 @@ def run_heyoka(
     info = np.zeros((batch, 4))
     info[:, 3] = np.nan
     chunks = [(c, min(c + bs, batch)) for c in range(0, batch, bs)]
-    if threads is None:
-        threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
-            os.cpu_count() or 1)
-    workers = max(1, min(int(threads), len(chunks)))
+    # default one thread: the per-batch Python work holds the GIL, and two threads
+    # measured no faster than one on the trident snake (~190k trajectories/s)
+    workers = max(1, min(int(threads or 1), len(chunks)))
     groups = [chunks[w::workers] for w in range(workers)]
+
+    hy = _heyoka()
+    outcomes = (hy.taylor_outcome.time_limit, hy.taylor_outcome.step_limit)
 
     def work(group: list[tuple[int, int]]) -> None:
         ta = copy.deepcopy(integ.template)
         for lo, hi in group:
             _run_chunk(ta, lo, hi, xs, pars, evt_time, evt_kind, segs, final, samples, info,
-                       max_steps, bound)
+                       max_steps, bound, outcomes)
 
     if workers == 1:
         work(groups[0])
@@ -240,19 +243,22 @@ def _run_chunk(
     info: np.ndarray,
     max_steps: int,
     bound: float,
+    outcomes_of_interest: tuple[Any, Any],
 ) -> None:
-    """Integrate trajectories ``lo:hi`` (≤ one SIMD batch) through all their events."""
-    hy = _heyoka()
-    time_limit = hy.taylor_outcome.time_limit
-    step_limit = hy.taylor_outcome.step_limit
+    """Integrate trajectories ``lo:hi`` (≤ one SIMD batch) through all their events.
+
+    ``outcomes_of_interest``: heyoka's ``(time_limit, step_limit)`` outcomes.
+    """
+    time_limit, step_limit = outcomes_of_interest
     bs = ta.batch_size
     width = hi - lo
     rows = np.arange(lo, hi)
-    pad = np.arange(bs) % width  # spare lanes repeat the chunk's trajectories
+    # lanes → trajectories; spare lanes (last chunk) repeat the chunk's trajectories
+    pad = slice(lo, hi) if width == bs else lo + np.arange(bs) % width
     state = ta.state
     par = ta.pars
-    state[:] = xs[lo + pad].T
-    par[:] = pars[lo + pad, 0].T
+    state[:] = xs[pad].T
+    par[:] = pars[pad, 0].T
     ta.set_time(np.zeros(bs))
     alive = np.ones(bs, dtype=bool)
     alive[width:] = False
@@ -261,20 +267,25 @@ def _run_chunk(
     steps = np.zeros(bs, dtype=np.int64)
     all_lanes = np.arange(width)
     final_only = evt_time.shape[1] == 1
+    offset = np.zeros(bs)  # global start time of each lane's current segment
     for e in range(evt_time.shape[1]):
-        target = evt_time[lo + pad, e]
-        if not alive.all():
+        target = evt_time[pad, e]
+        if segs > 1:
+            target = target - offset  # local time in the current segment
+        everyone = width == bs and bool(alive.all())
+        if not everyone:
             target = np.where(alive, target, ta.time)
         while True:
-            everyone = alive.all()
-            used = int(steps.max() if everyone else (steps[alive].max() if alive.any() else 0))
+            # most steps any live lane has taken so far
+            fresh = (e == 0 and everyone) or not alive.any()
+            used = 0 if fresh else int(steps[alive].max())
             ta.propagate_until(target, max_steps=max(max_steps - used, 1))
             outcomes, _, _, taken = zip(*ta.propagate_res, strict=True)
-            steps += np.array(taken, dtype=np.int64) if everyone else np.array(taken) * alive
+            steps += taken if everyone else np.array(taken) * alive
             if (
                 outcomes.count(time_limit) == bs
+                and used + max(taken) < max_steps
                 and np.abs(state).max() <= bound  # False for NaN
-                and steps.max() < max_steps
             ):
                 break  # the common case: every lane reached its target
             x = state.T
@@ -293,10 +304,11 @@ def _run_chunk(
                 state[:, dead] = 0.0
                 par[:, dead] = 0.0
                 target = np.where(alive, target, ta.time)
+                everyone = False
             if np.all(reached | ~alive):
                 break
             # a lane stopped the whole SIMD batch: the others go on from where they are
-        if final_only and alive.all():  # one segment, no samples: the common case
+        if final_only and everyone:  # one segment, no samples: the common case
             final[lo:hi] = state[:, :width].T
             continue
         live = all_lanes if alive.all() else np.flatnonzero(alive[:width])
@@ -305,6 +317,10 @@ def _run_chunk(
         if switch.any():  # the next segment's inputs
             lanes = live[switch]
             par[:, lanes] = pars[lo + lanes, kind[switch] + 1].T
+            offset[lanes] = evt_time[lo + lanes, e]
+            restart = np.zeros(bs, dtype=bool)
+            restart[lanes] = True
+            ta.set_time(np.where(restart, 0.0, ta.time))
         end = kind == segs - 1
         if end.any():
             final[lo + live[end]] = state[:, live[end]].T

@@ -201,7 +201,7 @@ def integrate(
         For ``fixed``: also integrate with ``steps/2`` to estimate the error.
     threads:
         Number of numba threads (default: numba's setting), or of threads
-        running heyoka's SIMD batches (default: the usable cores).
+        running heyoka's SIMD batches (default 1).
     """
     if method not in METHODS:
         raise OptionError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
