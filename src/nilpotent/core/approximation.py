@@ -499,7 +499,9 @@ def _pushforward(
     ]
     d = [Poly.variable(n, k) for k in range(n)]
     lin = ctx.apply_A(d)
-    shifts = [c - p if p != 0 else c for c, p in zip(coords.system.coordinates, ctx.p, strict=True)]
+    shifts = [
+        c - p if p != 0 else c for c, p in zip(coords.system.coordinates, coords.point, strict=True)
+    ]
     out = []
     for h in hat:
         hz = [c.compose(fwd, omega, top) for c in h]
@@ -517,7 +519,9 @@ def _pushforward(
                 b = ctx.Bse[k][l]
                 if b != 0 and vz[l].terms:
                     acc = acc + vz[l].scale(b)
-            vx.append(acc.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts))
+            vx.append(
+                acc.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts, keep_factors=ctx.numeric)
+            )
         out.append(tuple(vx))
     return tuple(out), exact
 

@@ -575,8 +575,12 @@ def _to_sympy_in_x(ctx: _Context, polys: Sequence[Poly]) -> tuple[sp.Expr, ...]:
     n = ctx.n
     d = [Poly.variable(n, k) for k in range(n)]
     lin = ctx.apply_A(d)  # z = A d, d = x − p
-    shifts = [c - p if p != 0 else c for c, p in zip(ctx.sys.coordinates, ctx.p, strict=True)]
-    return tuple(f.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts) for f in polys)
+    point = ctx.filtration.point  # exact, also in float mode: y(p) = 0 exactly
+    shifts = [c - p if p != 0 else c for c, p in zip(ctx.sys.coordinates, point, strict=True)]
+    return tuple(
+        f.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts, keep_factors=ctx.numeric)
+        for f in polys
+    )
 
 
 def privileged_coordinates(

@@ -33,6 +33,8 @@ from collections.abc import Iterable, Mapping, Sequence
 import symengine as se
 import sympy as sp
 
+from nilpotent.errors import PointError
+
 Monomial = tuple[int, ...]
 
 __all__ = [
@@ -303,14 +305,21 @@ class Poly:
             out.append(se.Mul(*f))
         return se.Add(*out) if out else se.Integer(0)
 
-    def to_sympy(self, symbols: Sequence[sp.Symbol]) -> sp.Expr:
+    def to_sympy(self, symbols: Sequence[sp.Expr], *, keep_factors: bool = False) -> sp.Expr:
+        """The polynomial as a sympy expression in ``symbols`` (symbols or expressions).
+
+        With ``keep_factors`` the products are not evaluated, so a float coefficient is
+        not distributed over a factor such as ``(x - 1/3)`` (which would round ``1/3``).
+        """
         out = []
         for m, c in sorted(self.terms.items()):
             f: list[sp.Expr] = [c._sympy_()]
             for s, a in zip(symbols, m, strict=True):
                 if a:
                     f.append(s**a)
-            out.append(sp.Mul(*f))
+            out.append(sp.Mul(*f, evaluate=not keep_factors) if len(f) > 1 else f[0])
+        if keep_factors and len(out) > 1:
+            return sp.Add(*out, evaluate=False)
         return sp.Add(*out)
 
 
@@ -331,6 +340,29 @@ def lie_derivative(
 def bracket(X: Sequence[Poly], Y: Sequence[Poly]) -> tuple[Poly, ...]:
     r"""$[X, Y] = DY\cdot X - DX\cdot Y$ for polynomial fields (no truncation)."""
     return tuple(lie_derivative(X, yj) - lie_derivative(Y, xj) for xj, yj in zip(X, Y, strict=True))
+
+
+def _series_pairs(expr: se.Basic, t: se.Symbol, degree: int) -> list[tuple[int, se.Basic]]:
+    """``(k, coefficient of t**k)`` for k <= degree: symengine's series, else sympy's.
+
+    symengine's univariate series lacks some functions (``Abs``); sympy's
+    ``series`` is the (slow, rare) fallback.  A non-integer or negative power of
+    ``t`` (no Taylor expansion) raises :class:`ArithmeticError`.
+    """
+    try:
+        raw = se.series(expr, t, n=degree + 1, as_deg_coef_pair=True)
+        pairs = [(deg, se.S(coef)) for deg, coef in raw]
+    except RuntimeError:
+        ts = t._sympy_()
+        ser = sp.series(expr._sympy_(), ts, 0, degree + 1).removeO()
+        poly = sp.Poly(ser, ts)  # PolynomialError for sqrt(t), 1/t
+        pairs = [(m[0], se.S(c)) for m, c in poly.terms()]
+    out = []
+    for deg, coef in pairs:
+        if int(deg) != deg or int(deg) < 0:
+            raise ArithmeticError(f"a term t**{deg}")
+        out.append((int(deg), coef))
+    return out
 
 
 def weighted_jets(
@@ -363,6 +395,12 @@ def weighted_jets(
     list of Poly
         The truncated jet of $f(\varphi(y))$ in $y$, one per expression, computed
         by $y_k \to t^{w_k} y_k$ and a univariate series in $t$ to order ``degree``.
+
+    Raises
+    ------
+    PointError
+        If an expression is not smooth at the point (no Taylor expansion:
+        ``sqrt(x)``, ``(x**2)**(1/3)`` at ``x = 0``).
 
     Examples
     --------
@@ -399,14 +437,20 @@ def weighted_jets(
         if not es.has(t):
             out.append(Poly.from_expr(es.xreplace(base) if base else es, ys))
             continue
-        pairs = se.series(es, t, n=degree + 1, as_deg_coef_pair=True)
-        acc = Poly(nv)
-        for deg, coef in pairs:
-            if int(deg) > degree:
-                continue
-            if base:
-                coef = coef.xreplace(base)
-            acc = acc + Poly.from_expr(coef, ys, ignore=(t,))
+        try:
+            pairs = _series_pairs(es, t, degree)
+            acc = Poly(nv)
+            for deg, coef in pairs:
+                if deg > degree:
+                    continue
+                if base:
+                    coef = coef.xreplace(base)
+                acc = acc + Poly.from_expr(coef, ys, ignore=(t,))
+        except (RuntimeError, ArithmeticError, ValueError, TypeError, sp.PolynomialError) as exc:
+            reason = " ".join(str(exc).split()).replace("_nilpotent_", "")
+            raise PointError(
+                f"{e} is not smooth at the point: it has no Taylor expansion there ({reason})"
+            ) from exc
         out.append(acc.truncate(weights, degree))
     if numeric:
         out = [Poly(p.nvars, {m: c.n() for m, c in p.terms.items()}) for p in out]
