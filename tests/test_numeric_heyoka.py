@@ -91,3 +91,13 @@ def test_missing_heyoka_names_the_install(monkeypatch):
     monkeypatch.setattr(heyoka_engine, "heyoka_available", lambda: False)
     with pytest.raises(MissingExtraError, match="pip install heyoka"):
         integrate(cs, np.zeros((1, 1)), _constant_input(1.0), engine="heyoka")
+
+
+def test_threads_give_the_same_end_points(snake):
+    rng = np.random.default_rng(3)
+    x0 = rng.uniform(-0.1, 0.1, (20, 6))
+    inputs = bracket_inputs(3, 2, 3, rng.uniform(0.01, 0.3, 20))
+    one = integrate(snake, x0, inputs, engine="heyoka", threads=1)
+    two = integrate(snake, x0, inputs, engine="heyoka", threads=2)
+    np.testing.assert_array_equal(one.final, two.final)
+    np.testing.assert_array_equal(one.steps, two.steps)
