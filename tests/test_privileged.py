@@ -12,7 +12,7 @@ from nilpotent.core.brackets import word_field
 from nilpotent.core.filtration import analyze
 from nilpotent.core.privileged import METHODS, privileged_coordinates
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import NotBracketGeneratingError, NotPrivilegedError, OptionError
+from nilpotent.errors import NotBracketGeneratingError, NotPrivilegedError, OptionError, PointError
 from nilpotent.models import get_model
 from polynomial_systems import change_coordinates, free_nilpotent, function_order, lie_derivative
 
@@ -203,3 +203,31 @@ def test_random_changes_keep_growth_and_certificates(case, method):
     coords = privileged_coordinates(sys, None, method)
     assert coords.orders == f1.weights
     check_orders_with_sympy(sys, coords)
+
+
+NOT_SMOOTH = {
+    "sqrt(a)": lambda a: sp.sqrt(a),
+    "sqrt(a**2)": lambda a: sp.sqrt(a**2),
+    "(a**2)**(1/3)": lambda a: (a**2) ** sp.Rational(1, 3),
+    "Abs(a)": lambda a: sp.Abs(a),
+}
+
+
+@pytest.mark.parametrize("component", sorted(NOT_SMOOTH))
+def test_fields_not_smooth_at_the_point_are_refused(component):
+    """No Taylor expansion at a = 0: a PointError naming the expression; fine at a = 1."""
+    a, b, c = sp.symbols("a b c")
+    sys = ControlSystem("not-smooth", (a, b, c), ((1, 0, NOT_SMOOTH[component](a)), (0, 1, a)))
+    with pytest.raises(PointError, match="not smooth at the point"):
+        privileged_coordinates(sys, (0, 0, 0))
+    assert privileged_coordinates(sys, (1, 0, 0)).orders == (1, 1, 2)
+
+
+def test_float_mode_vanishes_exactly_at_the_exact_point():
+    """In float mode the forward map keeps exact (x_k − p_k) factors: y(p) = 0 exactly."""
+    sys = get_model("trident-snake")
+    p = (0, 0, sp.Rational(1, 3), 0, 0, 0)
+    coords = privileged_coordinates(sys, p)
+    assert coords.numeric
+    at = dict(zip(sys.coordinates, p, strict=True))
+    assert [e.xreplace(at) for e in coords.forward] == [0] * 6
