@@ -34,9 +34,11 @@ found beyond the bound, not the crossing point), or after ``max_steps`` steps
 no minimum step size: near a finite-time blow-up Taylor steps shrink until the
 state overflows, which takes a few hundred steps.
 
-Compilation (~0.4 s for the trident snake) happens on the first use in a
-process; heyoka keeps compiled code in memory only, so every new process
-compiles again.  Integrators are kept per system (in the system's memo).
+Compilation (~0.4 s for the trident snake) happens on the first use of a
+system, ``K`` and tolerance; heyoka keeps the compiled code in its own on-disk
+cache (``$XDG_CACHE_HOME/heyoka``, default ``~/.cache/heyoka``), from which a
+new process loads it in ~0.02 s.  Integrators are kept per system (in the
+system's memo) for the rest of the process.
 """
 
 from __future__ import annotations
