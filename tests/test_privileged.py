@@ -231,3 +231,18 @@ def test_float_mode_vanishes_exactly_at_the_exact_point():
     assert coords.numeric
     at = dict(zip(sys.coordinates, p, strict=True))
     assert [e.xreplace(at) for e in coords.forward] == [0] * 6
+
+
+@pytest.mark.parametrize("method", ["linear", "algebraic", "exponential"])
+@pytest.mark.parametrize("name", ["trident-snake", "trident-snake-paper", "car-trailers:3"])
+def test_orders_agree_with_core_orders(name, method):
+    """Second oracle: nilpotent.core.orders.function_order (symbolic chains, another module)."""
+    from nilpotent.core.orders import function_order as chains_order
+
+    sys = get_model(name)
+    coords = privileged_coordinates(sys, None, method)
+    got = [
+        chains_order(sys, y, coords.point, w + 1)
+        for y, w in zip(coords.forward, coords.weights, strict=True)
+    ]
+    assert tuple(got) == coords.weights
