@@ -180,3 +180,14 @@ def test_not_bracket_generating_is_reported():
     flat = ControlSystem("flat", (x, y, z), ((1, 0, 0), (0, 1, 0)))
     with pytest.raises(NotBracketGeneratingError):
         plan(flat, (0, 0, 0), (0.1, 0.1, 0.1), engine="scipy")
+
+
+def test_handover_to_shooting_refinement_on_a_high_step_system():
+    system = get_model("car-trailers:1")
+    goal = random_goal(system, 0.2, np.random.default_rng(3))
+    p = plan(system, np.zeros(4), goal, engine="scipy", handover=1e-3)
+    kinds = [it.kind for it in p.iterations]
+    assert "newton" in kinds and kinds[0] == "nilpotent"
+    assert np.linalg.norm(resimulate(system, np.zeros(4), p.segments) - goal) <= 1e-8
+    with pytest.raises(PlanningError, match="handover"):
+        plan(system, np.zeros(4), goal, handover=-1.0)

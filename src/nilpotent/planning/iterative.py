@@ -45,11 +45,13 @@ from nilpotent.planning.controls import (
 )
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
-from nilpotent.planning.simulation import simulate_candidates, simulate_path
+from nilpotent.planning.simulation import resolve_engine, simulate_candidates, simulate_path
 
 ANCHORS = ("current", "goal", "start")
 #: Relative finite-difference step of the shooting refinement's Jacobian.
 FD_STEP = 1e-7
+#: Default error below which high-step systems hand over to the shooting refinement.
+HANDOVER = 1e-3
 #: Most Newton steps of the shooting refinement.
 REFINE_STEPS = 20
 
@@ -233,6 +235,7 @@ def _iterate(
     max_iterations: int,
     method: str,
     engine: str,
+    handover: float = 0.0,
 ) -> tuple[list[Segment], np.ndarray, float, list[Iteration], str]:
     """Nilpotent steps from ``x0`` toward ``xg``; ``model_at(x_k)`` gives the local model.
 
@@ -251,7 +254,7 @@ def _iterate(
     distance = merit(x)
     segments: list[Segment] = []
     history: list[Iteration] = []
-    while error > tol and len(history) < max_iterations:
+    while error > max(tol, handover) and len(history) < max_iterations:
         t_it = time.perf_counter()
         try:
             model = model_at(x)
@@ -289,7 +292,11 @@ def _iterate(
         )
     failure = ""
     if error > tol:
-        failure = f"tolerance {tol:g} not reached in {max_iterations} iterations"
+        failure = (
+            f"handed over to the shooting refinement at {error:.3g}"
+            if error <= handover
+            else f"tolerance {tol:g} not reached in {max_iterations} iterations"
+        )
     return segments, x, error, history, failure
 
 
@@ -359,6 +366,7 @@ def plan(
     trajectory_points: int = 40,
     engine: str = "auto",
     refine: bool = True,
+    handover: float | None = None,
 ) -> Plan:
     """Steer ``sys`` from ``start`` to ``goal`` by iterated nilpotent steering.
 
@@ -406,6 +414,12 @@ def plan(
         step (Newton on the true endpoint map, finite-difference Jacobian;
         reported as iterations of kind ``"newton"``).  ``False``: nilpotent
         steps only.
+    handover:
+        Hand over from the nilpotent steps to the shooting refinement once the
+        error is below this value (0: never).  Default: :data:`HANDOVER` for
+        systems of step ≥ 3 (their nilpotent convergence order ``1 + 1/r`` is
+        slow, Newton's is quadratic) when the compiled integrator is used (a
+        refinement step integrates ``P + 1`` trajectories), else 0.
 
     Raises
     ------
@@ -443,12 +457,18 @@ def plan(
         check_regular(system, xg, "goal")
     build = BUILDERS[builder]
     initial_error = float(np.linalg.norm(x0 - xg))
+    if handover is None:
+        fast = resolve_engine(engine, system) == "numba"
+        high_step = choose_builder(system, x0) == "symbolic"  # step >= 3 near the start
+        handover = HANDOVER if fast and high_step else 0.0
+    elif not (handover >= 0 and math.isfinite(handover)):
+        raise PlanningError(f"handover must be a number >= 0, got {handover}")
 
     if anchor == "start":
         fixed = build(system, start)
         back, _, _, history, failure = _iterate(
             system, xg, x0, lambda x: fixed, fixed, max(tol / 100, 1e-13), max_iterations,
-            method, engine,
+            method, engine, handover,
         )
         segments = list(reverse_segments(back))
         x = simulate_candidates(system, x0, [segments], engine)[0]
@@ -469,7 +489,7 @@ def plan(
                 return build(system, x)
 
         segments, x, error, history, failure = _iterate(
-            system, x0, xg, model_at, at_goal, tol, max_iterations, method, engine
+            system, x0, xg, model_at, at_goal, tol, max_iterations, method, engine, handover
         )
 
     if refine and error > tol and segments:

@@ -57,7 +57,8 @@ def harmonic_inputs(batch: Sequence[Sequence[Segment]]) -> HarmonicInputs:
 ENGINES = ("auto", "numba", "scipy")
 
 
-def _engine(engine: str, system: ControlSystem) -> str:
+def resolve_engine(engine: str, system: ControlSystem) -> str:
+    """The engine ``engine`` (one of :data:`ENGINES`) means for ``system``."""
     if engine not in ENGINES:
         raise OptionError(f"unknown engine {engine!r} (choose from {', '.join(ENGINES)})")
     if engine == "numba" and not numba_available():
@@ -88,7 +89,7 @@ def simulate_candidates(
         inputs = harmonic_inputs([candidates[i] for i in idxs])
         sol = integrate(
             compiled, np.repeat(x[None, :], len(idxs), axis=0), inputs,
-            engine=_engine(engine, system), rtol=RTOL, atol=ATOL,
+            engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL,
         )
         final = np.array(sol.final)
         final[~sol.ok] = np.nan
@@ -116,7 +117,7 @@ def simulate_path(
     times = times[times <= starts[-1]]
     sol = integrate(
         compiled_system(system), np.asarray(x0, dtype=float), harmonic_inputs([segments]),
-        engine=_engine(engine, system), rtol=RTOL, atol=ATOL, times=times,
+        engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL, times=times,
     )
     if not sol.all_ok:
         raise IntegrationError(
