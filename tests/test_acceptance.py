@@ -669,15 +669,10 @@ def test_growth_drops_at_point(cli, tmp_path):
     check_approximation(data, x, fields, [0, 0, 0], method="linear")
 
 
-BUG_MAX_LENGTH = (
-    "product bug: analyze stops at bracket length 8 and answers exit 2 with kind "
-    "'not-bracket-generating' (and advice to 'pass a larger max_length', which the CLI does "
-    "not offer) although the system is bracket-generating at p with step 11"
-)
 
 
 @pytest.mark.parametrize(
-    "k", [6, pytest.param(10, marks=pytest.mark.xfail(reason=BUG_MAX_LENGTH, strict=True))]
+    "k", [6, 10]
 )
 def test_high_step_singular_point(cli, tmp_path, k):
     """X1 = ∂a, X2 = ∂b + a^k ∂c at 0: growth (2, ..., 2, 3) of step k + 1, weights
@@ -714,13 +709,6 @@ def test_not_bracket_generating(cli, tmp_path, which):
     assert "Traceback" not in err
 
 
-@pytest.mark.xfail(
-    reason="product bug: where the rank at p stays below n up to its bracket-length cutoff "
-    "but is n nearby, analyze answers exit 2 (kind not-bracket-generating, 'pass a larger "
-    "max_length') instead of the analysis; here every field vanishes on a = 0, so p is "
-    "provably not bracket-generating and the answer is growth_vector [0]",
-    strict=True,
-)
 def test_fields_vanishing_at_point(cli, tmp_path):
     """X1 = a ∂a, X2 = a ∂b at 0: every bracket is a multiple of a (the line a = 0 is
     invariant), so at p the brackets span {0} at every length: not bracket-generating."""
@@ -836,12 +824,6 @@ def test_three_inputs_free_step2(cli, tmp_path):
     assert data["growth_vector"] == [3, 6] and weights == (1, 1, 1, 2, 2, 2)
 
 
-@pytest.mark.xfail(
-    reason="product bug: in float mode (sin(1/3) among the values at p) privileged.expressions "
-    "carry p as a rounded decimal ('1.0*p2 - 0.3333333333333333'), so y(p) = 1/3e16, not 0, "
-    "at the exact point p2 = 1/3",
-    strict=True,
-)
 def test_privileged_coordinates_vanish_exactly_at_exact_point(cli, tmp_path):
     """INTERFACE.md: y_j(p) = 0. With p given exactly (p2 = 1/3) this must hold exactly,
     also where the product computes in floats (sin(1/3) among the values at p): an outside
@@ -959,12 +941,6 @@ NOT_SMOOTH = {
 }
 
 
-@pytest.mark.xfail(
-    reason="product bug: approximate/simulate let RuntimeError('Puiseux series not "
-    "implemented') or ArithmeticError('not a polynomial ... sqrt(y0**2)') through (traceback, "
-    "exit 1) when a field is not smooth at the point; expected exit 2 and a JSON error",
-    strict=True,
-)
 @pytest.mark.parametrize("name", sorted(NOT_SMOOTH))
 @pytest.mark.parametrize("command", ["approximate", "simulate"])
 def test_fields_not_smooth_at_point_refused_cleanly(cli, tmp_path, name, command):

@@ -99,9 +99,18 @@ def test_not_bracket_generating_is_reported():
         singular_locus(s, f)
 
 
-def test_max_length_too_short_is_an_error():
-    with pytest.raises(NotBracketGeneratingError, match="max_length"):
-        analyze(ENGEL, max_length=2)
+def test_max_length_bounds_the_scan_at_singular_points():
+    # X2 = ∂2 + x1^k ∂3 at 0: the first bracket reaching ∂3 is ad_{X1}^k X2 (length k+1),
+    # so growth (2, ..., 2, 3) with step k+1; a shorter scan says "not within this length".
+    k = 7
+    s = ControlSystem("high", (x1, x2, x3), ((1, 0, 0), (0, 1, x1**k)))
+    full = analyze(s)
+    assert full.bracket_generating and full.step == k + 1 and full.weights == (1, 1, k + 1)
+    short = analyze(s, max_length=4)
+    assert not short.bracket_generating and short.max_length == 4
+    assert short.growth_vector == (2,) and not short.regular
+    # regular points never need more than the generic step, whatever max_length says
+    assert analyze(ENGEL, max_length=2).growth_vector == (2, 3, 4)
 
 
 def test_invalid_points_and_fields():

@@ -39,6 +39,7 @@ def analysis_payload(system, filtration) -> dict[str, Any]:
         "regular": filtration.regular,
         "generic_growth_vector": list(filtration.generic_growth_vector),
         "exact": filtration.exact,
+        "max_length": filtration.max_length,
         "frame": [format_word(w) for w in filtration.frame],
         "frame_values": [[format_expression(v) for v in col] for col in filtration.frame_values],
     }
@@ -61,6 +62,12 @@ def print_analysis(system, filtration) -> None:
         f"{filtration.growth_vector[-1] if filtration.growth_vector else 0}"
         f" of {system.n} dimensions"
     )
+    if not filtration.bracket_generating and filtration.generic_growth_vector[-1] == system.n:
+        verdict += (
+            f" at the point with brackets of length <= {filtration.max_length}, while they "
+            "span everything at nearby points (a longer bracket may still add a direction: "
+            "--max-length)"
+        )
     console.print(f"bracket generating: {verdict}")
     console.print(f"growth vector: ({', '.join(map(str, filtration.growth_vector))})")
     console.print(f"weights: ({', '.join(map(str, filtration.weights))})   step: {filtration.step}")
@@ -91,6 +98,15 @@ def analyze_command(
     model: ModelArg,
     at: AtOpt = None,
     param: ParamOpt = None,
+    max_length: Annotated[
+        int | None,
+        typer.Option(
+            "--max-length",
+            min=1,
+            help="Longest bracket length examined at the point (default: 2n+2, at least 12, "
+            "within a budget of Hall words); matters only at singular points.",
+        ),
+    ] = None,
     singular_locus: Annotated[
         bool,
         typer.Option(
@@ -108,7 +124,7 @@ def analyze_command(
 
     system = load_model_option(model, param)
     point = parse_point_option(at, system)
-    filtration = analyze(system, point)
+    filtration = analyze(system, point, max_length=max_length)
     locus = locus_of(system, filtration) if singular_locus else None
     if json_out:
         payload = analysis_payload(system, filtration)

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 import random
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import mpmath
@@ -122,6 +122,11 @@ class Filtration:
         The growth vector at random points near ``p``.
     exact:
         Whether the ranks at ``p`` were decided exactly.
+    max_length:
+        The longest bracket length examined at ``p``.  When the system is
+        bracket-generating at nearby points but not within this length at
+        ``p`` (only possible at a singular point), ``bracket_generating`` is
+        false *up to this length*: a longer bracket could still add a direction.
     """
 
     system: ControlSystem
@@ -135,6 +140,7 @@ class Filtration:
     regular: bool
     generic_growth_vector: tuple[int, ...]
     exact: bool
+    max_length: int = 0
 
     @property
     def frame_names(self) -> tuple[str, ...]:
@@ -485,7 +491,9 @@ def generic_growth_vector(
 # --- analysis at p ------------------------------------------------------------
 
 
-def _normalise_point(sys: ControlSystem, point: Sequence[object] | None) -> tuple[sp.Expr, ...]:
+def _normalise_point(
+    sys: ControlSystem, point: Sequence[object] | Mapping[str, object] | None
+) -> tuple[sp.Expr, ...]:
     """The point as sympy numbers; checks its length, that it is real, and the fields."""
     extra = set().union(*(sp.S(e).free_symbols for f in sys.specialized_fields for e in f))
     extra -= set(sys.coordinates)
@@ -496,6 +504,8 @@ def _normalise_point(sys: ControlSystem, point: Sequence[object] | None) -> tupl
         )
     if point is None:
         return sys.origin()
+    if isinstance(point, Mapping):
+        point = sys.point(point)
     if len(point) != sys.n:
         raise PointError(f"a point of {sys.name!r} has {sys.n} coordinates, got {len(point)}")
     values = tuple(sp.S(v) for v in point)
@@ -518,8 +528,11 @@ def analyze(
         The point $p$, a sequence of sympy numbers aligned with the coordinates
         (default: the origin).  Exact values give exact ranks.
     max_length:
-        Longest bracket length examined at ``p`` (default $2n + 2$).  Only
-        singular points can need lengths beyond the generic step.
+        Longest bracket length examined at ``p`` (default
+        :func:`default_max_length`).  Only singular points can need lengths
+        beyond the generic step; if the brackets up to this length do not span
+        at ``p`` while they do nearby, the result says ``bracket_generating``
+        false and records the length examined in ``Filtration.max_length``.
 
     Returns
     -------
@@ -530,9 +543,6 @@ def analyze(
 
     Raises
     ------
-    NotBracketGeneratingError
-        If brackets span $\\mathbb{R}^n$ at random points near ``p`` but those of
-        length $\\le$ ``max_length`` do not span it at ``p``.
     PointError
         If the point has the wrong length or the fields are undefined there.
 
@@ -550,7 +560,8 @@ def analyze(
     n, m = sys.n, sys.m
     generic = generic_growth_vector(sys, p)
     final = generic[-1]
-    limit = max_length if max_length is not None else 2 * n + 2
+    limit = max_length if max_length is not None else default_max_length(n, m)
+    limit = max(limit, len(generic))
     span = _ExactSpan(n)
     frame: list[Word] = []
     values: list[tuple[sp.Expr, ...]] = []
@@ -570,12 +581,6 @@ def analyze(
         growth.append(span.rank)
         if span.rank == final:
             break
-    if span.rank < final and final == n:
-        raise NotBracketGeneratingError(
-            f"the brackets of {sys.name!r} of length <= {limit} span only {span.rank} of "
-            f"{n} dimensions at the point, while they span all {n} at nearby points; "
-            f"pass a larger max_length"
-        )
     while len(growth) > 1 and growth[-1] == growth[-2]:
         growth.pop()
     growth_t = tuple(growth)
@@ -596,7 +601,48 @@ def analyze(
         regular=growth_t == generic,
         generic_growth_vector=generic,
         exact=span.exact,
+        max_length=limit,
     )
+
+
+HALL_WORD_BUDGET = 5000
+"""Most Hall words the default ``max_length`` lets :func:`analyze` examine at ``p``."""
+
+
+def default_max_length(n: int, m: int) -> int:
+    r"""The default longest bracket length examined at a point.
+
+    $\max(2n + 2, 12)$, lowered so that at most :data:`HALL_WORD_BUDGET` Hall
+    words (Witt's formula) of length $\le$ it exist for $m$ generators; it only
+    matters at singular points, where the span can stall and grow again later.
+    """
+    total = 0
+    length = 0
+    wanted = max(2 * n + 2, 12)
+    while length < wanted:
+        count = _witt(m, length + 1)
+        if total + count > HALL_WORD_BUDGET and length >= 2:
+            break
+        total += count
+        length += 1
+    return length
+
+
+def _witt(m: int, k: int) -> int:
+    """Dimension of the degree-k part of the free Lie algebra on m generators."""
+    return sum(_mobius(d) * m ** (k // d) for d in range(1, k + 1) if k % d == 0) // k
+
+
+def _mobius(k: int) -> int:
+    result, q = 1, 2
+    while q * q <= k:
+        if k % q == 0:
+            k //= q
+            if k % q == 0:
+                return 0
+            result = -result
+        q += 1
+    return -result if k > 1 else result
 
 
 def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> sp.Expr:
