@@ -458,11 +458,13 @@ def plan(
     build = BUILDERS[builder]
     initial_error = float(np.linalg.norm(x0 - xg))
     if handover is None:
-        fast = resolve_engine(engine, system) == "numba"
+        fast = refine and resolve_engine(engine, system) == "numba"
         high_step = choose_builder(system, x0) == "symbolic"  # step >= 3 near the start
         handover = HANDOVER if fast and high_step else 0.0
     elif not (handover >= 0 and math.isfinite(handover)):
         raise PlanningError(f"handover must be a number >= 0, got {handover}")
+    elif handover > 0 and not refine:
+        raise PlanningError("handover > 0 hands the end over to the refinement: needs refine=True")
 
     if anchor == "start":
         fixed = build(system, start)
