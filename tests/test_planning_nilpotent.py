@@ -257,3 +257,16 @@ def test_step2_steering_exact_for_any_start_and_goal(start, goal):
     result = steer_nilpotent(system, start, goal)
     assert result.error <= 1e-12 * max(1.0, max(abs(g) for g in goal))
     assert np.allclose(endpoint(system, start, result.segments), goal, atol=1e-11)
+
+
+def test_sampled_exact_trajectory_matches_integration():
+    from nilpotent.planning.exact_flow import sample
+
+    system, fields = engel()
+    segs = [Segment(0.9, 2.0, (InputSignal(0.3, (0.2,), (0.4,)), InputSignal(-0.5, (), (0.3,)))),
+            Segment(1.1, 3.0, (InputSignal(0.1), InputSignal(0.2, (0.5,), ())))]
+    y0 = np.array([0.1, -0.1, 0.2, 0.0])
+    times, states = sample(system, y0, segs, points_per_segment=10)
+    assert times.shape == (21,) and states.shape == (21, 4)
+    assert np.allclose(states[-1], endpoint(system, y0, segs), atol=1e-14)
+    assert np.allclose(states[10], integrate(fields, Y[:4], y0, segs[:1]), atol=1e-11)

@@ -198,11 +198,6 @@ def constant_segment(values: Sequence[float], duration: float = 1.0) -> Segment:
     return Segment(duration, 2 * math.pi / duration, tuple(InputSignal(float(v)) for v in values))
 
 
-def total_duration(segments: Sequence[Segment]) -> float:
-    """Sum of the segment durations."""
-    return float(sum(s.duration for s in segments))
-
-
 def reverse_segments(segments: Sequence[Segment]) -> tuple[Segment, ...]:
     """Controls that retrace ``segments`` backwards (last segment first, each reversed)."""
     return tuple(s.reversed() for s in reversed(segments))
