@@ -220,8 +220,8 @@ class _Context:
         n = self.n
         B = sp.Matrix(n, n, lambda j, k: filtration.frame_values[k][j])
         if numeric:
-            self.p = tuple(sp.Float(sp.N(v, 20), 15) for v in filtration.point)
-            B = B.applyfunc(lambda e: sp.Float(sp.N(e, 20), 15))
+            self.p = tuple(_to_float(v) for v in filtration.point)
+            B = B.applyfunc(_to_float)
             A = B.inv(method="LU")
         else:
             self.p = filtration.point
@@ -265,6 +265,11 @@ class _Context:
                     acc = acc + vec[k].scale(a)
             out.append(acc)
         return out
+
+
+def _to_float(value: sp.Expr) -> sp.Float:
+    """A 15-digit float of an exact value (evaluated by symengine: fast on large expressions)."""
+    return sp.Float(float(to_symengine(value).n()), 15)
 
 
 def _identity(n: int) -> tuple[Poly, ...]:
