@@ -14,15 +14,17 @@ method        engines                     accuracy reported (``tolerance``)
 * ``numba``: the DOP853 kernels of :mod:`nilpotent.numeric.kernels`, compiled
   into the system's cached module, ``prange`` over the batch;
 * ``numpy``: the same fixed-step DOP853 vectorised over the batch;
-* ``heyoka`` (optional extra, ``pip install heyoka``): heyoka's adaptive
-  Taylor method in SIMD batches (:mod:`nilpotent.numeric.heyoka_engine`;
-  tolerance ``min(rtol, atol)``, no ``min_step``); never chosen by ``auto``;
+* ``heyoka``: heyoka's adaptive Taylor method in SIMD batches
+  (:mod:`nilpotent.numeric.heyoka_engine`; tolerance ``min(rtol, atol)``, no
+  ``min_step``); the fastest engine measured here (``benchmarks/RESULTS.md``);
 * ``scipy``: :func:`scipy.integrate.solve_ivp` (``DOP853``) trajectory by
   trajectory, the reference; it also accepts inputs given as a Python function
   of ``t`` (:func:`solve_function_input`);
-* ``auto``: ``numba`` when its kernels are already in the on-disk cache or the
-  batch has at least :data:`AUTO_NUMBA_BATCH` trajectories, else ``scipy``
-  (adaptive) / ``numpy`` (fixed).
+* ``auto``: for the adaptive method, ``heyoka`` when the batch has at least
+  :data:`AUTO_NUMBA_BATCH` trajectories (and heyoka is installed, as it is by
+  default); otherwise ``numba`` when its kernels are already in the on-disk
+  cache or the batch is that large, else ``scipy`` (adaptive) / ``numpy``
+  (fixed).
 
 Every trajectory gets a :class:`Status`; blow-up (``|x_k| > bound``), a step
 below ``min_step`` and ``max_steps`` end that trajectory and are reported,
@@ -347,6 +349,11 @@ def kernels_cached(system: CompiledSystem) -> bool:
 
 def _choose_engine(system: CompiledSystem, method: str, engine: str, batch: int) -> str:
     if engine == "auto":
+        if method == "adaptive" and batch >= AUTO_NUMBA_BATCH:
+            from nilpotent.numeric.heyoka_engine import heyoka_available
+
+            if heyoka_available():
+                return "heyoka"
         if numba_available() and (batch >= AUTO_NUMBA_BATCH or kernels_cached(system)):
             return "numba"
         return "scipy" if method == "adaptive" else "numpy"
