@@ -41,6 +41,8 @@ __all__ = [
     "Monomial",
     "Poly",
     "ZeroTest",
+    "bracket",
+    "lie_derivative",
     "to_symengine",
     "weighted_degree",
     "weighted_jets",

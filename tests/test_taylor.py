@@ -1,0 +1,85 @@
+"""Weighted Taylor jets and truncated polynomials, against plain sympy."""
+
+from __future__ import annotations
+
+import hypothesis.strategies as st
+import pytest
+import symengine as se
+import sympy as sp
+from hypothesis import given, settings
+
+from nilpotent.core.taylor import Poly, ZeroTest, bracket, weighted_jets
+from nilpotent.errors import PointError
+
+X = sp.symbols("x1 x2 x3")
+Y = sp.symbols("y1 y2 y3")
+FUNCS = [sp.sin, sp.cos, sp.exp, lambda u: 1 / (1 + u), lambda u: sp.sqrt(1 + u)]
+
+
+def sympy_weighted_jet(expr, subs, weights, degree):
+    """Weighted parts of degree <= degree of expr(x = subs(y)), by sympy series in t."""
+    t = sp.Symbol("t")
+    e = expr.xreplace(subs).xreplace({y: t**w * y for y, w in zip(Y, weights, strict=True)})
+    ser = sp.series(e, t, 0, degree + 1).removeO()
+    return sp.expand(ser.subs(t, 1))
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(range(len(FUNCS))), st.sampled_from(range(3)), st.integers(-2, 2)
+        ),
+        min_size=1,
+        max_size=3,
+    ),
+    st.lists(st.integers(1, 3), min_size=3, max_size=3),
+    st.integers(1, 4),
+    st.lists(st.integers(-2, 2), min_size=3, max_size=3),
+)
+def test_weighted_jets_match_sympy_series(terms, weights, degree, quad):
+    """f(x) = Σ c·F(x_k) along x = (y1, y2 + q0 y1², y3 + q1 y1 y2 + q2 y2²): jets as sympy."""
+    expr = sp.Add(*[c * FUNCS[i](X[k]) for i, k, c in terms])
+    y1, y2, y3 = Y
+    images = (y1, y2 + quad[0] * y1**2, y3 + quad[1] * y1 * y2 + quad[2] * y2**2)
+    ys = [se.Symbol(str(y)) for y in Y]
+    args = [Poly.from_expr(se.S(e), ys) for e in images]
+    [jet] = weighted_jets([se.S(expr)], [se.S(x) for x in X], args, weights, degree)
+    expected = sympy_weighted_jet(expr, dict(zip(X, images, strict=True)), weights, degree)
+    assert sp.expand(jet.to_sympy(Y) - expected) == 0
+
+
+def test_poly_arithmetic_and_truncation():
+    ys = [se.Symbol(str(y)) for y in Y]
+    p = Poly.from_expr(se.S(1 + Y[0] + Y[1] ** 2), ys)
+    q = Poly.from_expr(se.S(Y[0] - Y[2]), ys)
+    w = (1, 1, 2)
+    assert sp.expand(p.mul(q).to_sympy(Y) - (1 + Y[0] + Y[1] ** 2) * (Y[0] - Y[2])) == 0
+    prod = p.mul(q, w, 2).to_sympy(Y)  # keep weighted degree <= 2: y1 - y3 + y1**2
+    assert sp.expand(prod - (Y[0] - Y[2] + Y[0] ** 2)) == 0
+    comp = p.compose([q, q, q]).to_sympy(Y)
+    assert sp.expand(comp - (1 + (Y[0] - Y[2]) + (Y[0] - Y[2]) ** 2)) == 0
+
+
+def test_bracket_convention():
+    """[X, Y] = DY·X − DX·Y: [∂1, y1 ∂2] = ∂2."""
+    ys = [se.Symbol(str(y)) for y in Y[:2]]
+    one, zero = Poly.constant(2, 1), Poly(2)
+    X1 = (one, zero)
+    X2 = (zero, Poly.from_expr(ys[0], ys))
+    b = bracket(X1, X2)
+    assert b[0].is_zero() and b[1].terms == {(0, 0): 1}
+
+
+def test_zero_test():
+    z = ZeroTest()
+    assert z(se.S(0)) and not z(se.S(1))
+    assert z(se.cos(se.Rational(1, 5)) ** 2 + se.sin(se.Rational(1, 5)) ** 2 - 1)
+    assert z.numeric_decisions == 1
+    assert z(se.RealDouble(1e-17)) and not z(se.RealDouble(1e-3))
+
+
+def test_not_smooth():
+    a = se.Symbol("a")
+    with pytest.raises(PointError, match="not smooth"):
+        weighted_jets([se.sqrt(a)], [a], [Poly.variable(1, 0)], [1], 2)
