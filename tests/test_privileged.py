@@ -246,3 +246,16 @@ def test_orders_agree_with_core_orders(name, method):
         for y, w in zip(coords.forward, coords.weights, strict=True)
     ]
     assert tuple(got) == coords.weights
+
+
+def test_two_ways_of_computing_orders_agree():
+    """Orders of non-privileged (linear) coordinates: read in Bellaïche's coordinates, or by
+    chains of Lie derivatives on ordinary jets; both give (1, 1, 2, 2) for engel_changed."""
+    from nilpotent.core.privileged import _certified_orders, _Context, _identity
+
+    sys = engel_changed()
+    ctx = _Context.of(analyze(sys), False)
+    lin = _identity(4)
+    via_reference, _ = _certified_orders(ctx, lin, lin)
+    via_chains, _ = _certified_orders(ctx, lin, lin, use_reference=False)
+    assert via_reference == via_chains == (1, 1, 2, 2)

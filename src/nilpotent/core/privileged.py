@@ -46,9 +46,11 @@ Certificate
     $s < w_j$ has positive weighted order and vanishes at $p$, so
     $\mathrm{ord}_p(y_j) \ge w_j$; and a chain of length $w_j$ of the degree
     $-1$ parts that is nonzero at $0$ (computed) gives $= w_j$.  Where the jets
-    show a lower term, the order is computed directly as the least $s$ with
-    some $X_{i_1}\cdots X_{i_s}y_j(p) \ne 0$ (ordinary Taylor jets of the fields
-    to degree $s - 1$).
+    show a lower term (the coordinates are not privileged), the orders are read
+    in Bellaïche's coordinates $y'$, themselves certified first: the order of
+    $y_j$ is the weighted order of $y_j(z(y'))$; failing that, it is computed
+    directly as the least $s$ with some $X_{i_1}\cdots X_{i_s}y_j(p) \ne 0$
+    (ordinary Taylor jets of the fields to degree $s - 1$).
 """
 
 from __future__ import annotations
@@ -393,11 +395,15 @@ def _certified_orders(
     inverse_poly: Sequence[Poly],
     *,
     quick: bool = False,
+    use_reference: bool = True,
 ) -> tuple[tuple[int | float, ...] | None, tuple[tuple[Poly, ...], ...]]:
-    """Computed orders of the coordinates, and the field jets (to degree w_j) used.
+    r"""Computed orders of the coordinates, and the field jets (to degree w_j) used.
 
     With ``quick``, return ``None`` for the orders as soon as the jets show the
-    coordinates are not privileged (without computing the lower orders).
+    coordinates are not privileged (without computing the lower orders).  Where
+    they are not privileged the orders are read in Bellaïche's coordinates $y'$
+    (certified privileged first): $\mathrm{ord}_p(f)$ is the weighted order of
+    $f(z(y'))$; failing that, from chains of Lie derivatives.
     """
     w = ctx.weights
     jets = _fields_in(ctx, forward_poly, inverse_poly, w, list(w))
@@ -405,16 +411,31 @@ def _certified_orders(
     if quick and low:
         return None, jets
     hat = [[c.homogeneous_part(w, w[j] - 1) for j, c in enumerate(comps)] for comps in jets]
+    reference = _reference_inverse(ctx) if low and use_reference else None
     orders: list[int | float] = []
     for j, wj in enumerate(w):
         if not low and _chain_order_homogeneous(hat, j, wj, ctx.zero):
             orders.append(wj)
             continue
+        if reference is not None:
+            g = forward_poly[j].compose(reference, w, wj + 1).drop_zeros(ctx.zero)
+            if g.terms:
+                orders.append(min(weighted_degree(m, w) for m in g.terms))
+                continue
         s = _chain_order(ctx, forward_poly, inverse_poly, Poly.variable(ctx.n, j), wj)
         if s is None:
             s = _chain_order(ctx, forward_poly, inverse_poly, Poly.variable(ctx.n, j), ctx.step + 1)
         orders.append(s if s is not None else float("inf"))
     return tuple(orders), jets
+
+
+def _reference_inverse(ctx: _Context) -> tuple[Poly, ...] | None:
+    """$z$ as polynomials in Bellaïche's coordinates, when their certificate passes."""
+    forward, inverse = _algebraic(ctx)[:2]
+    orders, _ = _certified_orders(ctx, forward, inverse, quick=True, use_reference=False)
+    if orders is None or tuple(orders) != tuple(ctx.weights):
+        return None
+    return inverse
 
 
 # --- the exponential map -----------------------------------------------------------
