@@ -590,10 +590,10 @@ def coordinate_names(sys: ControlSystem) -> tuple[sp.Symbol, ...]:
     """Symbols ``y1..yn`` for the privileged coordinates (another letter if the model uses them)."""
     taken = set(sys.coordinate_names) | {k for k, _ in sys.parameters}
     for letter in ("y", "z", "w", "eta", "xi"):
-        names = tuple(sp.Symbol(f"{letter}{k}", real=True) for k in range(1, sys.n + 1))
+        names = tuple(sp.Symbol(f"{letter}{k}") for k in range(1, sys.n + 1))
         if not taken & {str(s) for s in names}:
             return names
-    return tuple(sp.Symbol(f"y_priv{k}", real=True) for k in range(1, sys.n + 1))
+    return tuple(sp.Symbol(f"y_priv{k}") for k in range(1, sys.n + 1))
 
 
 def _to_sympy_in_x(ctx: _Context, polys: Sequence[Poly]) -> tuple[sp.Expr, ...]:
