@@ -454,7 +454,8 @@ def _exponential_map(ctx: _Context, degree: int) -> list[Poly]:
     r"""$E(s) = \exp(s_nY_n)\circ\cdots\circ\exp(s_1Y_1)(p)$ in $x$, to weighted degree ``degree``.
 
     Each flow by Picard iteration $x \leftarrow E_{l-1} + \int_0^{s_l} Y_l(x)$ on
-    weighted jets (the integral raises the weighted degree by $w_l$).
+    weighted jets (the integral raises the weighted degree by $w_l$, so a fixed
+    number of iterations is exact to ``degree``).
     """
     n, w = ctx.n, ctx.weights
     key = ("exponential_map", degree)
@@ -469,12 +470,11 @@ def _exponential_map(ctx: _Context, degree: int) -> list[Poly]:
         Y = word_field_symengine(ctx.sys, word)
         base = E
         cur = base
-        for _ in range(degree // wl + 2):
+        # The error of the k-th iterate has weighted order >= (k + 1) w_l (the integral
+        # adds w_l), so ceil((degree + 1) / w_l) - 1 iterations are exact to ``degree``.
+        for _ in range(-(-(degree + 1) // wl) - 1):
             vals = weighted_jets(Y, ctx.xsyms, cur, w, degree - wl, ctx.numeric)
-            new = [b + _integrate(v, l) for b, v in zip(base, vals, strict=True)]
-            if all(a.terms == b.terms for a, b in zip(new, cur, strict=True)):
-                break
-            cur = new
+            cur = [b + _integrate(v, l) for b, v in zip(base, vals, strict=True)]
         E = cur
     cache[key] = E
     return E
