@@ -288,3 +288,18 @@ def test_methods_registry_and_unknown_method():
     assert set(METHODS) == {"linear", "algebraic", "exponential"}
     with pytest.raises(OptionError):
         approximate(get_model("unicycle"), None, "magic")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("name", "limit"), [("trident-snake", 1.0), ("car-trailers:5", 10.0), ("car-trailers:6", 30.0)]
+)
+def test_speed_targets(name, limit):
+    """Issue 3 targets (CPU seconds, single thread; measured ~0.03, 0.1, 0.5 s)."""
+    import time
+
+    sys = get_model(name)
+    start = time.process_time()
+    a = approximate(sys)
+    assert time.process_time() - start < limit
+    assert a.certificate.ok
