@@ -63,7 +63,7 @@ def independent_checks(sys: ControlSystem, a) -> None:
         ] == [0] * sys.n
 
 
-@pytest.mark.parametrize("method", ["auto", "algebraic", "exponential"])
+@pytest.mark.parametrize("method", ["auto", "algebraic", "exponential", "exponential-1"])
 @pytest.mark.parametrize("name", MODELS)
 def test_certificate_and_independent_checks(name, method):
     sys = get_model(name)
@@ -285,7 +285,7 @@ def test_numeric_on_request_matches_exact():
 
 
 def test_methods_registry_and_unknown_method():
-    assert set(METHODS) == {"linear", "algebraic", "exponential"}
+    assert set(METHODS) == {"linear", "algebraic", "exponential", "exponential-1"}
     with pytest.raises(OptionError):
         approximate(get_model("unicycle"), None, "magic")
 

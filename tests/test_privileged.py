@@ -107,6 +107,20 @@ def test_exponential_inverse_is_the_flow_composition(name):
     assert [sp.expand(a - b) for a, b in zip(c.inverse, q, strict=True)] == [0] * sys.n
 
 
+@pytest.mark.parametrize("name", ["heisenberg", "engel", "cartan"])
+def test_exponential_first_kind_is_the_flow_of_the_combination(name):
+    """x(y) = exp(Σ y_j Y_j)(0), by the Lie series of Z = Σ y_j Y_j (nilpotent: it terminates)."""
+    sys = get_model(name)
+    c = privileged_coordinates(sys, None, "exponential-1")
+    check_orders_with_sympy(sys, c)
+    fields = [word_field(sys, word) for word in c.filtration.frame]
+    Z = [
+        sp.expand(sum(y * f[k] for y, f in zip(c.names, fields, strict=True))) for k in range(sys.n)
+    ]
+    q = _flow(Z, sys.coordinates, 1, [0] * sys.n, terms=8)
+    assert [sp.expand(a - b) for a, b in zip(c.inverse, q, strict=True)] == [0] * sys.n
+
+
 @pytest.mark.parametrize("method", ALL_METHODS)
 def test_martinet_singular_point(method):
     sys = get_model("martinet")

@@ -35,6 +35,10 @@ Methods (registry :data:`METHODS`)
         so the dropped terms have order $> r + w_j$: enough for the
         certificate (which needs $> w_j + 1$) and for pushing the
         approximation forward (composites $G(y(x))$ right to order $r$).
+    ``"exponential-1"``
+        Coordinates of the 1st kind, $x = \exp(\sum_j y_j Y_j)(p)$ (the flow of
+        $\sum_j y_j Y_j$ for time 1, by Picard iteration on weighted jets),
+        truncated at weighted degree $r$ and inverted like ``exponential``.
     ``"auto"``
         The cheapest privileged one: ``linear`` when its certificate passes,
         else ``algebraic``.
@@ -528,10 +532,55 @@ def exponential_grading(weights: Sequence[int], chi: Sequence[Poly]) -> list[int
     return [min(weighted_degree(m, weights) for m in c.terms) for c in chi]
 
 
+def _first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
+    r"""$E_1(y) = \exp(\sum_j y_j Y_j)(p)$ in $x$, to weighted degree ``degree``.
+
+    The flow $x(\tau)$ of $Z = \sum_j y_j Y_j$ from $p$, by Picard iteration
+    $x \leftarrow p + \int_0^\tau Z(x)\,d\sigma$ on jets in $(y, \tau)$ ($\tau$ of
+    weight 0): every term of $Z$ carries some $y_j$ (weight $\ge 1$), so each
+    iteration is exact to one more degree; then $\tau = 1$.
+    """
+    n, w = ctx.n, ctx.weights
+    nv = n + 1
+    wt = [*w, 0]
+    point = [Poly.constant(nv, to_symengine(v)) for v in ctx.p]
+    frame = [word_field_symengine(ctx.sys, word) for word in ctx.filtration.frame]
+    flat = [c for f in frame for c in f]
+    ys = [Poly.variable(nv, j) for j in range(n)]
+    cur = point
+    for _ in range(degree):
+        jets = weighted_jets(flat, ctx.xsyms, cur, wt, degree - 1, ctx.numeric)
+        new = []
+        for k in range(n):
+            acc = Poly(nv)
+            for j in range(n):
+                comp = jets[j * n + k]
+                if comp.terms:
+                    acc = acc + ys[j].mul(comp, wt, degree)
+            new.append(point[k] + _integrate(acc, n))
+        cur = new
+    out = []
+    for poly in cur:
+        terms: dict = {}
+        for m, c in poly.terms.items():
+            key = (*m[:n],)
+            terms[key] = terms[key] + c if key in terms else c
+        out.append(Poly(n, terms))
+    return out
+
+
 def _exponential(ctx: _Context) -> Built:
+    return _from_exponential_map(ctx, _exponential_map(ctx, max(ctx.weights)))
+
+
+def _exponential_first_kind(ctx: _Context) -> Built:
+    return _from_exponential_map(ctx, _first_kind_map(ctx, max(ctx.weights)))
+
+
+def _from_exponential_map(ctx: _Context, E: Sequence[Poly]) -> Built:
+    """Coordinates defined by $x = E(y)$ (weighted degree <= r); forward: the series inverse."""
     n, w = ctx.n, ctx.weights
     r = max(w)
-    E = _exponential_map(ctx, r)
     zE = ctx.apply_A([e - Poly.constant(n, to_symengine(p)) for e, p in zip(E, ctx.p, strict=True)])
     # Truncation grading: z_k counts its order ω_k, the weighted order of χ_k(y) in the
     # privileged y (computed); a dropped monomial z^β has order >= Σ β_k ω_k.  y_m is kept
@@ -557,6 +606,7 @@ METHODS: dict[str, Callable[[_Context], Built]] = {
     "linear": _linear,
     "algebraic": _algebraic,
     "exponential": _exponential,
+    "exponential-1": _exponential_first_kind,
 }
 """Registry: method name → builder of (forward, inverse) polynomial maps.  ``"auto"`` is
 accepted by :func:`privileged_coordinates` besides these."""
