@@ -36,6 +36,8 @@ def approximation_payload(system, approx) -> dict[str, Any]:
         "expressions": [format_expression(e) for e in coords.forward],
         "inverse": [format_expression(e) for e in coords.inverse],
         "inverse_exact": coords.inverse_exact,
+        "forward_exact": coords.forward_exact,
+        "numeric": coords.numeric,
     }
     payload["fields"] = [[format_expression(c) for c in f] for f in approx.fields]
     payload["fields_x"] = [[format_expression(c) for c in f] for f in approx.fields_x]
@@ -46,6 +48,14 @@ def approximation_payload(system, approx) -> dict[str, Any]:
         "homogeneous": cert.homogeneous,
         "growth_vector_at_0": list(cert.growth_vector_at_0),
         "remainder_order_ok": cert.remainder_order_ok,
+        "remainder_orders": list(cert.remainder_orders),
+        "step": cert.step,
+        "growth_vector": list(cert.growth_vector),
+        "pushforward_ok": cert.pushforward_ok,
+        "privileged": cert.privileged,
+        "exact": cert.exact,
+        "ok": cert.ok,
+        "failures": list(cert.failures()),
     }
     return payload
 
@@ -59,8 +69,8 @@ def approximate_command(
         str,
         typer.Option(
             "--method",
-            help="Privileged coordinates: linear, algebraic, exponential, or auto "
-            "(the cheapest privileged one).",
+            help="Privileged coordinates: linear, algebraic, exponential (2nd kind), "
+            "exponential-1 (1st kind), or auto (the cheapest privileged one).",
         ),
     ] = "auto",
     param: ParamOpt = None,
