@@ -15,6 +15,7 @@ from nilpotent.cli import (  # noqa: F401  (each module registers its command)
     cmd_analyze,
     cmd_approximate,
     cmd_models,
+    cmd_plan,
     cmd_reproduce,
     cmd_scaling,
     cmd_simulate,
