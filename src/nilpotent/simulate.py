@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
+from nilpotent.core.points import format_point
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.compile import CompiledSystem, compile_fields, compile_system
@@ -582,16 +583,11 @@ class Comparison:
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/simulation@1`` object of INTERFACE.md (plus a few added fields)."""
-        from nilpotent.core.expressions import format_expression
-
         return {
             "schema": "nilpotent/simulation@1",
             "model": self.system.name,
             "coordinates": list(self.system.coordinate_names),
-            "point": {
-                n: format_expression(v)
-                for n, v in zip(self.system.coordinate_names, self.point, strict=True)
-            },
+            "point": format_point(self.system, self.point),
             "bracket": list(self.bracket),
             "amplitude": self.amplitude,
             "omega": self.omega,
@@ -778,16 +774,11 @@ class ScalingStudy:
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/scaling@1`` JSON object."""
-        from nilpotent.core.expressions import format_expression
-
         return {
             "schema": "nilpotent/scaling@1",
             "model": self.system.name,
             "coordinates": list(self.system.coordinate_names),
-            "point": {
-                n: format_expression(v)
-                for n, v in zip(self.system.coordinate_names, self.point, strict=True)
-            },
+            "point": format_point(self.system, self.point),
             "bracket": list(self.bracket),
             "omega": self.omega,
             "periods": self.periods,
