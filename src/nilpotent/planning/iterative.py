@@ -236,8 +236,12 @@ def _iterate(
     method: str,
     engine: str,
     handover: float = 0.0,
+    guess: list[Segment] | None = None,
 ) -> tuple[list[Segment], np.ndarray, float, list[Iteration], str]:
     """Nilpotent steps from ``x0`` toward ``xg``; ``model_at(x_k)`` gives the local model.
+
+    If the very first step makes no progress, its (full) controls are appended
+    to ``guess``, as an initial guess for the shooting refinement.
 
     A step is accepted when it decreases the homogeneous distance estimate
     ``‖z(x)‖ = max_j |z_j(x)|^{1/w_j}`` in the privileged coordinates ``z`` of
@@ -249,6 +253,8 @@ def _iterate(
         z = target_model.forward(x)
         return target_model.nilpotent.quasi_norm(z) if np.all(np.isfinite(z)) else math.inf
 
+    if guess is None:
+        guess = []
     x = x0.copy()
     error = float(np.linalg.norm(x - xg))
     distance = merit(x)
@@ -277,6 +283,8 @@ def _iterate(
                 )
         pick = int(np.argmin(merits))
         if not merits[pick] < distance:
+            if not history:
+                guess.extend(trials[0][1])
             return segments, x, error, history, (
                 f"no progress at iteration {len(history) + 1}: every nilpotent step "
                 f"(damped down to {trials[-1][0]}) leaves the distance to the goal at or "
@@ -457,6 +465,7 @@ def plan(
         check_regular(system, xg, "goal")
     build = BUILDERS[builder]
     initial_error = float(np.linalg.norm(x0 - xg))
+    guess: list[Segment] = []  # first nilpotent step, if it made no progress
     if handover is None:
         fast = refine and resolve_engine(engine, system) == "numba"
         high_step = choose_builder(system, x0) == "symbolic"  # step >= 3 near the start
@@ -470,9 +479,9 @@ def plan(
         fixed = build(system, start)
         back, _, _, history, failure = _iterate(
             system, xg, x0, lambda x: fixed, fixed, max(tol / 100, 1e-13), max_iterations,
-            method, engine, handover,
+            method, engine, handover, guess,
         )
-        segments = list(reverse_segments(back))
+        segments = list(reverse_segments(back or (guess if refine else [])))
         x = simulate_candidates(system, x0, [segments], engine)[0]
         error = float(np.linalg.norm(x - xg))
         if error <= tol:
@@ -491,13 +500,22 @@ def plan(
                 return build(system, x)
 
         segments, x, error, history, failure = _iterate(
-            system, x0, xg, model_at, at_goal, tol, max_iterations, method, engine, handover
+            system, x0, xg, model_at, at_goal, tol, max_iterations, method, engine, handover,
+            guess,
         )
+        if refine and not segments and guess:
+            segments = list(guess)
+            x = simulate_candidates(system, x0, [segments], engine)[0]
+            error = float(np.linalg.norm(x - xg))
 
     if refine and error > tol and segments:
         before = error
-        segments, x, error, more = _refine(system, x0, segments, xg, tol, engine)
-        history.extend(more)
+        refined, x_ref, err_ref, more = _refine(system, x0, segments, xg, tol, engine)
+        if more:  # keep the refinement only if it improved anything
+            segments, x, error = refined, x_ref, err_ref
+            history.extend(more)
+        elif guess and not history:  # the failed first step is no plan: drop it
+            segments, x, error = [], x0.copy(), initial_error
         if error <= tol:
             failure = ""
         else:
