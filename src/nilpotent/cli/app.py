@@ -181,8 +181,11 @@ def write_atomically(path: str | os.PathLike[str], suffix: str | None = None) ->
     )
     os.close(fd)
     tmp_path = Path(tmp)
+    mask = os.umask(0)
+    os.umask(mask)
     try:
         yield tmp_path
+        os.chmod(tmp_path, 0o666 & ~mask)  # mkstemp makes it private; the result is ordinary
         os.replace(tmp_path, target)
     finally:
         if tmp_path.exists():
