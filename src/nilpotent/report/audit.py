@@ -479,7 +479,12 @@ def _check_vf(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
                 }
                 if len(shifts) == 1:
                     (shift,) = shifts
-                    why += f" (every leg turned by {_fmt(shift)}: another body frame)"
+                    why += (
+                        f" (every leg turned by {_fmt(shift)}, i.e. the legs relabelled "
+                        "cyclically, while x1, x2 stay in the old body frame; the paper's "
+                        "note that parametrisations can vary does not make these the "
+                        "same fields)"
+                    )
         yield _entry(
             f"sec4-vf-g{k + 1}",
             printed.section,
@@ -531,7 +536,10 @@ def _check_liebrackets(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry
         body = c.bracket_at_origin(c.body, i, j)
         ok = _same(printed.components, ours)
         if ok:
-            why = f"[g{i},g{j}](0) computed from eq. vf"
+            why = (
+                f"[g{i},g{j}](0) computed from eq. vf with [X,Y] = DY·X − DX·Y "
+                "(the sign the paper's printed brackets follow)"
+            )
         else:
             why = f"[g{i},g{j}](0) from eq. vf is {format_field(ours, X)}"
             if _same(printed.components[3:], body[3:]):
@@ -925,8 +933,13 @@ def _check_step(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
 
 
 def _check_hat_brackets(paper: PaperContent, c: _Computed) -> Iterable[AuditEntry]:
+    """Section 6's ĝ4..ĝ6, read with Section 7's naming, where the hatted names are defined.
+
+    The clash with Section 4's naming of g5, g6 is its own entry
+    (``sec4-sec7-bracket-names``), so it is not counted twice here.
+    """
     fields = [f.components for f in paper.approximation_y]
-    labels = paper.bracket_labels_sec4
+    labels = paper.bracket_labels_sec7
     for printed in paper.approximation_brackets_y:
         k = int(printed.name[1:])
         i, j = labels[k]
@@ -934,20 +947,20 @@ def _check_hat_brackets(paper: PaperContent, c: _Computed) -> Iterable[AuditEntr
         ok = _same(printed.components, ours)
         other = [
             kk
-            for kk, (a, b) in paper.bracket_labels_sec7.items()
+            for kk, (a, b) in paper.bracket_labels_sec4.items()
             if _same(printed.components, _bracket_y(fields[a - 1], fields[b - 1]))
         ]
-        why = f"[ĝ{i},ĝ{j}] of the printed ĝ"
+        why = f"[ĝ{i},ĝ{j}] of the printed ĝ (Section 7 defines ĝ{k} = [ĝ{i},ĝ{j}])"
         if not ok and other:
-            a, b = paper.bracket_labels_sec7[other[0]]
+            a, b = paper.bracket_labels_sec4[other[0]]
             why = (
                 f"[ĝ{i},ĝ{j}] = {format_field(ours, Y)}; the printed value is [ĝ{a},ĝ{b}], "
-                "Section 7's naming"
+                "Section 4's naming"
             )
         yield _entry(
             f"sec6-bracket-g{k}",
             printed.section,
-            f"ĝ{k} = [ĝ{i},ĝ{j}] (Section 4's naming) equals "
+            f"ĝ{k} = [ĝ{i},ĝ{j}] (Section 7's naming) equals "
             f"{format_field(printed.components, Y)}.",
             _printed(printed),
             format_field(ours, Y),
