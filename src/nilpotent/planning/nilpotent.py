@@ -276,6 +276,10 @@ METHODS: dict[str, Callable[[TriangularSystem, np.ndarray, np.ndarray, int], lis
 }
 
 
+_NEGLIGIBLE_SCALE = 1e-100
+"""Start and goal within this quasi-norm of 0 are not steered (they are 0 to rounding)."""
+
+
 def steer_nilpotent(
     system: TriangularSystem,
     y_start: Sequence[float],
@@ -327,8 +331,10 @@ def steer_nilpotent(
     if ys.shape != (system.n,) or yg.shape != (system.n,):
         raise PlanningError(f"start and goal need {system.n} privileged coordinates")
     scale = max(system.quasi_norm(ys), system.quasi_norm(yg))
-    if scale == 0 or np.array_equal(ys, yg):
-        return NilpotentSteering(system, tuple(ys), tuple(yg), (), tuple(ys), 0.0, method, 0.0)
+    if scale < _NEGLIGIBLE_SCALE or np.array_equal(ys, yg):
+        # nothing to steer (below this scale the dilation to the unit sphere overflows)
+        err = float(np.max(np.abs(ys - yg)))
+        return NilpotentSteering(system, tuple(ys), tuple(yg), (), tuple(ys), err, method, 0.0)
     unit_s = system.dilate(ys, 1 / scale)
     unit_g = system.dilate(yg, 1 / scale)
     segments = METHODS[method](system, unit_s, unit_g, seed)
