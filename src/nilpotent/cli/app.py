@@ -68,6 +68,32 @@ AtOpt = Annotated[
         help="Point NAME=VALUE,...; unnamed coordinates are 0 (default: the origin).",
     ),
 ]
+PlotOpt = Annotated[
+    Path | None,
+    typer.Option("--plot", metavar="FILE", help="Write a figure (.png, .pdf, .svg, ...)."),
+]
+
+
+def check_plot_path(path: Path | None) -> None:
+    """Refuse a ``--plot`` file whose suffix matplotlib cannot write."""
+    if path is None:
+        return
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    kinds = FigureCanvasBase.get_supported_filetypes()
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix not in kinds:
+        raise OptionError(
+            f"--plot {path}: unknown image type {suffix!r} (use one of {', '.join(sorted(kinds))})"
+        )
+
+
+def save_figure(fig: Any, path: Path) -> None:
+    """Write ``fig`` to ``path`` whole or not at all."""
+    with write_atomically(path) as tmp:
+        fig.savefig(tmp, format=path.suffix.lower().lstrip("."), dpi=120)
+
+
 JsonOpt = Annotated[
     bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else.")
 ]

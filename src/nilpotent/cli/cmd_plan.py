@@ -12,11 +12,14 @@ from nilpotent.cli.app import (
     JsonOpt,
     ModelArg,
     ParamOpt,
+    PlotOpt,
     app,
+    check_plot_path,
     cli_errors,
     emit_json,
     load_model_option,
     parse_point_option,
+    save_figure,
     stderr_console,
     stdout_console,
     write_atomically,
@@ -36,11 +39,6 @@ TolOpt = Annotated[
     typer.Option("--tol", metavar="T",
                  help="Stop when the Euclidean distance to the goal is at most T (> 0)."),
 ]
-PlotOpt = Annotated[
-    Path | None,
-    typer.Option("--plot", metavar="FILE",
-                 help="Write a figure of the plan (.png, .pdf, .svg, ...)."),
-]
 AnimateOpt = Annotated[
     Path | None,
     typer.Option("--animate", metavar="FILE", help="Write an animation of the motion (.gif)."),
@@ -56,16 +54,7 @@ MaxItOpt = Annotated[
 
 
 def _check_outputs(plot: Path | None, animate: Path | None) -> None:
-    if plot is not None:
-        from matplotlib.backend_bases import FigureCanvasBase
-
-        kinds = FigureCanvasBase.get_supported_filetypes()
-        suffix = plot.suffix.lower().lstrip(".")
-        if suffix not in kinds:
-            raise OptionError(
-                f"--plot {plot}: unknown image type {suffix!r} "
-                f"(use one of {', '.join(sorted(kinds))})"
-            )
+    check_plot_path(plot)
     if animate is not None and animate.suffix.lower() != ".gif":
         raise OptionError(f"--animate {animate}: the animation is written as GIF (use .gif)")
     for path, option in ((plot, "--plot"), (animate, "--animate")):
@@ -140,9 +129,7 @@ def plan_command(
     if plot is not None:
         from nilpotent.planning.plotting import plot_plan
 
-        fig = plot_plan(result)
-        with write_atomically(plot) as tmp:
-            fig.savefig(tmp, format=plot.suffix.lower().lstrip("."), dpi=120)
+        save_figure(plot_plan(result), plot)
     if animate is not None:
         from nilpotent.planning.plotting import animate_plan
 

@@ -11,24 +11,24 @@ from nilpotent.cli.app import (
     JsonOpt,
     ModelArg,
     ParamOpt,
+    PlotOpt,
     app,
+    check_plot_path,
     cli_errors,
     emit_json,
     load_model_option,
     parse_float_list,
     parse_int_pair,
     parse_point_option,
+    save_figure,
     stdout_console,
 )
 from nilpotent.cli.cmd_simulate import (
     BracketOpt,
     OmegaOpt,
     PeriodsOpt,
-    PlotOpt,
     check_periods,
-    check_plot_path,
     check_positive,
-    save_figure,
 )
 from nilpotent.errors import OptionError
 

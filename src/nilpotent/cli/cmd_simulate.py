@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
@@ -13,14 +12,16 @@ from nilpotent.cli.app import (
     JsonOpt,
     ModelArg,
     ParamOpt,
+    PlotOpt,
     app,
+    check_plot_path,
     cli_errors,
     emit_json,
     load_model_option,
     parse_int_pair,
     parse_point_option,
+    save_figure,
     stdout_console,
-    write_atomically,
 )
 from nilpotent.errors import OptionError
 
@@ -38,32 +39,6 @@ OmegaOpt = Annotated[
 PeriodsOpt = Annotated[
     int, typer.Option("--periods", metavar="K", help="Number of whole periods (>= 1).")
 ]
-PlotOpt = Annotated[
-    Path | None,
-    typer.Option("--plot", metavar="FILE", help="Write a figure (.png, .pdf, .svg, ...)."),
-]
-
-
-def check_plot_path(path: Path | None) -> None:
-    """Refuse a ``--plot`` file whose suffix matplotlib cannot write."""
-    if path is None:
-        return
-    from matplotlib.backend_bases import FigureCanvasBase
-
-    kinds = FigureCanvasBase.get_supported_filetypes()
-    suffix = path.suffix.lower().lstrip(".")
-    if suffix not in kinds:
-        raise OptionError(
-            f"--plot {path}: unknown image type {suffix!r} (use one of {', '.join(sorted(kinds))})"
-        )
-
-
-def save_figure(fig: Any, path: Path) -> None:
-    """Write ``fig`` to ``path`` whole or not at all."""
-    with write_atomically(path) as tmp:
-        fig.savefig(tmp, format=path.suffix.lower().lstrip("."), dpi=120)
-
-
 def check_positive(value: float, option: str) -> float:
     if not (math.isfinite(value) and value > 0):
         raise OptionError(f"{option} must be a positive number, got {value}")

@@ -17,18 +17,20 @@ from nilpotent.cli.app import (
     JsonOpt,
     ModelArg,
     ParamOpt,
+    PlotOpt,
     app,
+    check_plot_path,
     cli_errors,
     emit_json,
     load_model_option,
     parse_float_list,
     parse_int_pair,
     parse_point_option,
+    save_figure,
     stderr_console,
     stdout_console,
     write_atomically,
 )
-from nilpotent.cli.cmd_simulate import PlotOpt, check_plot_path, save_figure
 from nilpotent.errors import OptionError
 
 
