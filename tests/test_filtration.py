@@ -215,3 +215,11 @@ def test_martinet_like_fields_with_other_functions(third):
     assert f.growth_vector == (2, 2, 3) and not f.regular
     assert f.generic_growth_vector == (2, 3)
     assert f.frame_values[2] == (0, 0, -1)
+
+
+def test_singular_locus_refuses_an_unmanageable_determinant():
+    from nilpotent.errors import ComputationLimitError
+    from nilpotent.models import get_model
+
+    with pytest.raises(ComputationLimitError, match="characters"):
+        singular_locus(get_model("trident-snake-joints"))

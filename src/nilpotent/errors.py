@@ -72,3 +72,9 @@ class PlanningError(NilpotentError):
     """Steering failed: singular start/goal/path, or no progress."""
 
     kind = "planning"
+
+
+class ComputationLimitError(NilpotentError):
+    """A symbolic result would be too large to compute or print in reasonable time."""
+
+    kind = "computation-limit"

@@ -61,7 +61,12 @@ from nilpotent.core.brackets import (
     word_values_at,
 )
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import ModelError, NotBracketGeneratingError, PointError
+from nilpotent.errors import (
+    ComputationLimitError,
+    ModelError,
+    NotBracketGeneratingError,
+    PointError,
+)
 
 GENERIC_TOL = 1e-30
 """Relative tolerance of the 212-bit rank decisions at random points."""
@@ -656,6 +661,9 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
 
     Raises
     ------
+    ComputationLimitError
+        If a frame field is longer than :data:`SINGULAR_LOCUS_MAX_CHARS`
+        characters (the expanded determinant would be unmanageable).
     NotBracketGeneratingError
         If the frame is not square (the system is not bracket-generating at the
         filtration's point).
@@ -674,5 +682,19 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
             f"n = {sys.n}: no determinant (the system is not bracket-generating there)"
         )
     cols = [word_field_symengine(sys, w) for w in f.frame]
+    sizes = [sum(len(str(e)) for e in col) for col in cols]
+    if max(sizes) > SINGULAR_LOCUS_MAX_CHARS:
+        worst = max(range(len(sizes)), key=sizes.__getitem__)
+        raise ComputationLimitError(
+            f"the singular locus of {sys.name!r} is not expanded: the frame field "
+            f"{format_word(f.frame[worst])} alone has {sizes[worst]:,} characters (limit "
+            f"{SINGULAR_LOCUS_MAX_CHARS:,}), so the {sys.n}x{sys.n} determinant would be far "
+            "larger; analyze points instead (the regular/singular verdict at a point needs "
+            "no determinant)"
+        )
     mat = se.DenseMatrix(sys.n, sys.n, [cols[k][j] for j in range(sys.n) for k in range(sys.n)])
     return to_sympy(sys, se.expand(mat.det()))
+
+
+SINGULAR_LOCUS_MAX_CHARS = 20_000
+"""Largest frame column (characters of its components) whose determinant is expanded."""
