@@ -10,8 +10,10 @@ import itertools
 from collections.abc import Sequence
 
 import sympy as sp
+from hypothesis import strategies as st
 
 from nilpotent.core.system import ControlSystem
+from nilpotent.models import get_model
 
 
 def witt_dimension(m: int, k: int) -> int:
@@ -182,3 +184,34 @@ def monomials(variables: Sequence[sp.Symbol], degrees: Sequence[int]):
     for d in degrees:
         for combo in itertools.combinations_with_replacement(variables, d):
             yield sp.Mul(*combo)
+
+
+# --- random triangular coordinate changes (hypothesis) ---------------------------------
+
+BASES = ["heisenberg", "engel", "cartan", "free-2-3", "martinet"]
+
+
+def base_system(name: str) -> ControlSystem:
+    return free_nilpotent(2, 3) if name == "free-2-3" else get_model(name)
+
+
+@st.composite
+def changed_systems(draw):
+    """A polynomial system pushed through a random triangular polynomial change of degree 2–3."""
+    name = draw(st.sampled_from(BASES))
+    sys = base_system(name)
+    x = sys.coordinates
+    shifts = [sp.Integer(0)]
+    for j in range(1, sys.n):
+        earlier = x[:j]
+        terms = draw(
+            st.lists(
+                st.tuples(
+                    st.integers(-2, 2).filter(bool),
+                    st.lists(st.sampled_from(range(j)), min_size=2, max_size=3),
+                ),
+                max_size=2,
+            )
+        )
+        shifts.append(sp.Add(*[c * sp.Mul(*[earlier[k] for k in ks]) for c, ks in terms]))
+    return name, change_coordinates(sys, shifts)

@@ -18,7 +18,9 @@ from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NotPrivilegedError, OptionError
 from nilpotent.models import get_model
 from polynomial_systems import (
+    base_system,
     change_coordinates,
+    changed_systems,
     free_nilpotent,
     growth_vector_at,
     right_normed_brackets,
@@ -128,26 +130,6 @@ def test_car_trailers_5_needs_algebraic_coordinates():
 
 # --- invariance under coordinate changes; an independent recomputation ----------------------
 
-BASES = ["heisenberg", "engel", "cartan", "martinet", "free-2-3"]
-
-
-def base_system(name: str) -> ControlSystem:
-    return free_nilpotent(2, 3) if name == "free-2-3" else get_model(name)
-
-
-@st.composite
-def changed(draw):
-    name = draw(st.sampled_from(BASES))
-    sys = base_system(name)
-    x = sys.coordinates
-    shifts = [sp.Integer(0)]
-    for j in range(1, sys.n):
-        coeffs = draw(st.lists(st.integers(-2, 2), min_size=2, max_size=2))
-        a, b = draw(st.sampled_from(range(j))), draw(st.sampled_from(range(j)))
-        shifts.append(coeffs[0] * x[a] * x[b] + coeffs[1] * x[a] ** 2 * x[b])
-    return name, change_coordinates(sys, shifts)
-
-
 def fields_in_y_by_sympy(sys: ControlSystem, a) -> list[list[sp.Expr]]:
     """[X_i]_y = (∂y/∂x)(x(y)) X_i(x(y)), exactly, with plain sympy (polynomial systems)."""
     c = a.coordinates
@@ -159,7 +141,7 @@ def fields_in_y_by_sympy(sys: ControlSystem, a) -> list[list[sp.Expr]]:
 
 
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(changed(), st.sampled_from(["auto", "algebraic", "exponential"]))
+@given(changed_systems(), st.sampled_from(["auto", "algebraic", "exponential"]))
 def test_changed_systems(case, method):
     name, sys = case
     a = approximate(sys, None, method)

@@ -14,7 +14,14 @@ from nilpotent.core.privileged import METHODS, privileged_coordinates
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NotBracketGeneratingError, NotPrivilegedError, OptionError, PointError
 from nilpotent.models import get_model
-from polynomial_systems import change_coordinates, free_nilpotent, function_order, lie_derivative
+from polynomial_systems import (
+    base_system,
+    change_coordinates,
+    changed_systems,
+    free_nilpotent,
+    function_order,
+    lie_derivative,
+)
 
 ALL_METHODS = ("auto", *METHODS)
 
@@ -177,35 +184,6 @@ def test_free_systems_linear_privileged(m, r):
 
 
 # --- random triangular coordinate changes ---------------------------------------------------
-
-BASES = ["heisenberg", "engel", "cartan", "free-2-3", "martinet"]
-
-
-def base_system(name: str) -> ControlSystem:
-    return free_nilpotent(2, 3) if name == "free-2-3" else get_model(name)
-
-
-@st.composite
-def changed_systems(draw):
-    """A polynomial system pushed through a random triangular polynomial change of degree 2–3."""
-    name = draw(st.sampled_from(BASES))
-    sys = base_system(name)
-    x = sys.coordinates
-    shifts = [sp.Integer(0)]
-    for j in range(1, sys.n):
-        earlier = x[:j]
-        terms = draw(
-            st.lists(
-                st.tuples(
-                    st.integers(-2, 2).filter(bool),
-                    st.lists(st.sampled_from(range(j)), min_size=2, max_size=3),
-                ),
-                max_size=2,
-            )
-        )
-        shifts.append(sp.Add(*[c * sp.Mul(*[earlier[k] for k in ks]) for c, ks in terms]))
-    return name, change_coordinates(sys, shifts)
-
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(changed_systems(), st.sampled_from(["auto", "algebraic", "exponential"]))
