@@ -48,6 +48,7 @@ import symengine as se
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
+from nilpotent import typeset
 from nilpotent.core.brackets import (
     Word,
     format_word,
@@ -151,6 +152,17 @@ class Filtration:
     def frame_names(self) -> tuple[str, ...]:
         """The frame words as users write them (``"[X1,X2]"``)."""
         return tuple(format_word(w) for w in self.frame)
+
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """Growth vector, weights and the adapted frame (a table) as LaTeX (``align*``)."""
+        return typeset.filtration_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return typeset.filtration_display(self).html()
 
 
 # --- rank trackers ------------------------------------------------------------

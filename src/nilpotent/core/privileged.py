@@ -65,6 +65,7 @@ from dataclasses import dataclass, field
 import symengine as se
 import sympy as sp
 
+from nilpotent import typeset
 from nilpotent.core.brackets import word_field_symengine
 from nilpotent.core.filtration import Filtration, analyze
 from nilpotent.core.system import ControlSystem
@@ -203,6 +204,17 @@ class PrivilegedCoordinates:
         for x, e in zip(self.system.coordinates, self.inverse, strict=True):
             lines.append(f"  {x} = {e}")
         return "\n".join(lines)
+
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """The change of coordinates, weights and computed orders as LaTeX (``align*``)."""
+        return typeset.privileged_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return typeset.privileged_display(self).html()
 
 
 # --- shared context ----------------------------------------------------------------

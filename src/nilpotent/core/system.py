@@ -21,6 +21,7 @@ from functools import cached_property
 
 import sympy as sp
 
+from nilpotent import typeset
 from nilpotent.errors import ModelError
 
 Expr = sp.Expr
@@ -177,3 +178,14 @@ class ControlSystem:
             terms = [f"({e})∂{c}" for e, c in zip(f, self.coordinate_names, strict=True) if e != 0]
             lines.append(f"  X{i} = " + (" + ".join(terms) or "0"))
         return "\n".join(lines)
+
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """The fields, coordinates and parameters as LaTeX (``align*``)."""
+        return typeset.system_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return typeset.system_display(self).html()
