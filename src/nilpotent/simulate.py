@@ -633,6 +633,21 @@ class Comparison:
         ax2.legend(loc="best", fontsize="small")
         return fig, (ax1, ax2)
 
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """The input, the predicted motion and the errors by weight as LaTeX (``align*``)."""
+        from nilpotent import typeset
+
+        return typeset.comparison_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        from nilpotent import typeset
+
+        return typeset.comparison_display(self).html()
+
 
 def _floats(arr: np.ndarray) -> list[float]:
     return [float(v) for v in np.asarray(arr).ravel()]

@@ -186,6 +186,21 @@ class Plan:
             "segments": [s.to_dict() for s in self.segments],
         }
 
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """Start, goal, the point reached and the iterations as LaTeX (``align*``)."""
+        from nilpotent import typeset
+
+        return typeset.plan_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        from nilpotent import typeset
+
+        return typeset.plan_display(self).html()
+
 
 def _as_floats(point: Sequence[object], n: int, what: str) -> np.ndarray:
     try:
