@@ -23,6 +23,8 @@ demo: $(STAMP)
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks examples
 
+export NO_MKDOCS_2_WARNING := 1
+
 test: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks examples
 	$(VENV)/bin/pytest -n 2 --dist loadfile --nbmake tests docs/tutorial.ipynb
