@@ -41,7 +41,11 @@ def test_wheel_and_sdist_install_into_a_fresh_venv_and_run(tmp_path):
     (wheel,) = dist.glob("nilpotent-*.whl")
     (sdist,) = dist.glob("nilpotent-*.tar.gz")
     names = zipfile.ZipFile(wheel).namelist()
-    needed_files = ("nilpotent/py.typed", "nilpotent/report/assets/paper.tex", "nilpotent/cli/app.py")
+    needed_files = (
+        "nilpotent/py.typed",
+        "nilpotent/report/assets/paper.tex",
+        "nilpotent/cli/app.py",
+    )
     for needed in needed_files:
         assert needed in names, needed
     assert any(n.endswith("entry_points.txt") for n in names)
