@@ -13,13 +13,16 @@ from __future__ import annotations
 
 import html
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import sympy as sp
 
+from nilpotent.core.expressions import parse_expression
+from nilpotent.errors import NilpotentError
 from nilpotent.models.trident import BODY_LEG_ANGLES, PAPER_LEG_ANGLES
 from nilpotent.report.audit import Audit
+from nilpotent.report.latexmath import PARTIAL_PREFIX
 from nilpotent.report.page import animation, code, figure, formula, page, table
 from nilpotent.typeset import expr_latex, field_latex, matrix_latex, word_latex
 
@@ -151,17 +154,48 @@ def _paper_cell(text: str) -> str:
     return html.escape(text)
 
 
-def _audit_table(audit: Audit) -> str:
+def _computed_cell(text: str, coordinates: Sequence[sp.Symbol]) -> str:
+    """The computed side of an audit entry: typeset when it is one field or expression.
+
+    The audit prints fields in the expression grammar with ``∂x4`` for the
+    coordinate field; such text is read back with the safe grammar (``∂v`` as a
+    placeholder symbol) and typeset; any other text (a sentence, a list) stays text.
+    """
+    names: dict[str, sp.Basic] = {str(x): x for x in coordinates}
+    partials = {x: sp.Symbol(PARTIAL_PREFIX + str(x)) for x in coordinates}
+    names.update({str(d): d for d in partials.values()})
+    try:
+        expr = sp.expand(parse_expression(text.replace("∂", PARTIAL_PREFIX), names))
+    except NilpotentError:
+        return html.escape(text)
+    components = [expr.coeff(d) for d in partials.values()]
+    rest = sp.expand(expr - sum(c * d for c, d in zip(components, partials.values(), strict=True)))
+    if any(rest.has(d) or any(c.has(d) for c in components) for d in partials.values()):
+        return html.escape(text)  # not linear in the coordinate fields: keep the text
+    if all(c == 0 for c in components):
+        return formula(expr_latex(expr))
+    return formula(field_latex(components, list(partials)))
+
+
+def _audit_table(audit: Audit, coordinates: Sequence[sp.Symbol]) -> str:
     rows = [
-        (e.id, e.section, e.statement, _paper_cell(e.paper), e.computed, e.verdict, e.explanation)
+        (
+            e.id,
+            e.section,
+            e.statement,
+            _paper_cell(e.paper),
+            _computed_cell(e.computed, coordinates),
+            e.verdict,
+            e.explanation,
+        )
         for e in audit.entries
     ]
     return table(
         ("id", "§", "statement", "paper (as printed)", "computed", "verdict", "explanation"),
         rows,
         row_classes=[e.verdict for e in audit.entries],
-        cell_classes=("mono", "num", "", "", "mono", "verdict", ""),
-        raw_columns=(3,),
+        cell_classes=("mono", "num", "", "", "", "verdict", ""),
+        raw_columns=(3, 4),
         widths=("10%", "3%", "20%", "22%", "20%", "6%", "19%"),
         css_class="audit",
     )
@@ -187,6 +221,8 @@ def build_page(
 ) -> str:
     """The HTML of ``index.html`` (see :mod:`nilpotent.report.pipeline`)."""
     body, vf = systems["body"], systems["vf"]
+    names_y = [y for a in approximations.values() for y in a.names]
+    coordinates = list(dict.fromkeys([*body.coordinates, *vf.coordinates, *names_y]))
     pairs = ((1, 2), (2, 3), (1, 3))
     n_diff = len(audit.differing)
     summary = (
@@ -373,7 +409,7 @@ def build_page(
         "Each verdict was decided by computation when this page was generated (exact "
         "comparison of expressions; simulations only for which bracket a periodic input "
         "realises). The paper's values are parsed from its LaTeX source.</p>"
-        f"<p>What differs:</p><ul>{differing}</ul>" + _audit_table(audit)
+        f"<p>What differs:</p><ul>{differing}</ul>" + _audit_table(audit, coordinates)
     )
 
     files = (
