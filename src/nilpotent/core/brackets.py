@@ -49,6 +49,11 @@ def word_length(w: Word) -> int:
 def format_word(w: Word) -> str:
     """The word as users write it.
 
+    Parameters
+    ----------
+    w : Word
+        A generator index (from 1) or a pair ``(u, v)`` meaning $[u, v]$.
+
     Examples
     --------
     >>> format_word((1, (1, 2)))
@@ -202,6 +207,18 @@ def bracket(
 
     Component $j$ is $X(Y_j) - Y(X_j)$, so $[X,Y]f = X(Yf) - Y(Xf)$.
 
+    Parameters
+    ----------
+    X, Y : sequence of sympy expressions, length n
+        The components of the two fields along ``coords``.
+    coords : sequence of sympy symbols, length n
+        The coordinates the components are functions of.
+
+    Returns
+    -------
+    tuple of sympy expressions, length n
+        The components of $[X, Y]$.
+
     Examples
     --------
     >>> x, y, th = sp.symbols("x y theta")
@@ -307,6 +324,19 @@ def word_field(sys: ControlSystem, word: Word) -> tuple[sp.Expr, ...]:
     Computed with symengine (each bracket expanded), converted to sympy and
     cached on ``sys``.  Parameters are substituted.  Convention
     $[X,Y] = DY\\cdot X - DX\\cdot Y$.
+
+    Parameters
+    ----------
+    sys : ControlSystem
+        The system whose fields $X_1, \\dots, X_m$ the word brackets.
+    word : Word
+        A generator index $i$ (the field $X_i$, from 1) or a pair ``(u, v)``
+        meaning $[u, v]$.
+
+    Returns
+    -------
+    tuple of sympy expressions, length n
+        The components of the bracket along ``sys.coordinates``.
 
     Examples
     --------

@@ -671,6 +671,18 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
     singular points (it may also contain regular points where another frame
     would be needed).  Needs a square frame, i.e. a bracket-generating system.
 
+    Parameters
+    ----------
+    sys : ControlSystem
+        The system (parameters substituted).
+    filtration : Filtration, optional
+        Whose frame words to use (default: ``analyze(sys)`` at the origin).
+
+    Returns
+    -------
+    sympy expression
+        $\\det(Y_1, \\dots, Y_n)$ as a function of the coordinates.
+
     Raises
     ------
     ComputationLimitError

@@ -89,6 +89,14 @@ def function_order(
         The order, or ``math.inf`` if every derivative of length $\\le$
         ``max_order`` vanishes at the point (also when they vanish identically).
 
+    Raises
+    ------
+    OptionError
+        If ``max_order`` is negative.
+    PointError
+        If the point has the wrong number of coordinates, or a derivative is
+        undefined there.
+
     Examples
     --------
     >>> x, y, th = sp.symbols("x y theta")

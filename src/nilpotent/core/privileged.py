@@ -120,6 +120,12 @@ class PrivilegedCoordinates:
         $B$, column $k$ is $Y_{k+1}(p)$ (so $\partial_{z_k}|_p = Y_{k+1}(p)$).
     linear_part:
         $A = B^{-1}$ ($z = A(x - p)$, the linear adapted coordinates).
+    forward_poly:
+        $y_j$ as :class:`~nilpotent.core.taylor.Poly` in the linear adapted
+        coordinates $z$ (the exact form of ``forward``).
+    inverse_poly:
+        $z_k$ as :class:`~nilpotent.core.taylor.Poly` in $y$ (the exact form of
+        ``inverse``, before $x = p + Bz$).
     """
 
     method: str

@@ -45,6 +45,13 @@ class ControlSystem:
     description:
         One line saying what the model is.
 
+    Raises
+    ------
+    ModelError
+        No coordinates, duplicate coordinates, no fields, a field whose number
+        of components is not the number of coordinates, or a name used both as
+        a coordinate and as a parameter.
+
     Examples
     --------
     >>> import sympy as sp
