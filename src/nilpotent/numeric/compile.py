@@ -293,6 +293,15 @@ def compile_fields(
         Label for messages and generated files.
     backend:
         One of :data:`BACKENDS`.
+
+    Raises
+    ------
+    OptionError
+        An unknown ``backend``.
+    ModelError
+        A field without one component per coordinate, a free symbol that is
+        neither a coordinate nor given in ``params``, or a constant that is not
+        a real number.
     """
     if backend not in BACKENDS:
         raise OptionError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
@@ -331,7 +340,16 @@ def compile_fields(
 
 
 def compile_system(system: Any, *, backend: str = "auto") -> CompiledSystem:
-    """Compile a :class:`~nilpotent.core.system.ControlSystem` (parameters substituted)."""
+    """Compile a :class:`~nilpotent.core.system.ControlSystem` (parameters substituted).
+
+    Parameters
+    ----------
+    system : ControlSystem
+        The system; its parameter values are substituted.
+    backend : str
+        One of :data:`BACKENDS` (see :func:`compile_fields`, which raises on
+        bad input).
+    """
     return compile_fields(
         system.coordinates,
         system.specialized_fields,

@@ -123,6 +123,8 @@ class Plan:
         Samples of the true trajectory (for plots and animations).
     tol:
         The tolerance asked for; ``converged`` says whether ``error ≤ tol``.
+    converged:
+        Whether ``error ≤ tol`` (computed from them, not an argument).
     anchor, builder:
         Where the approximations were taken and how they were built.
     initial_error:

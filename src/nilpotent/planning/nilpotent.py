@@ -309,6 +309,13 @@ def steer_nilpotent(
         :class:`~nilpotent.errors.PlanningError` is raised if the goal is not
         reached to ``1e-12·max(1, ‖goal‖)``.
 
+    Raises
+    ------
+    PlanningError
+        Start or goal of the wrong size, an unknown method, ``"step2"`` for a
+        system of step > 2, or a goal the method does not reach to the
+        tolerance above.
+
     Examples
     --------
     >>> import sympy as sp

@@ -234,6 +234,13 @@ def reproduce(
     Returns
     -------
     Reproduction
+
+    Raises
+    ------
+    OptionError
+        ``out_dir`` cannot be written (its parent is missing, it is not a
+        folder, or it is a folder this function did not write); nothing is
+        written then, and a failure later leaves no partial folder behind.
     """
     target = Path(out_dir).resolve()
     _check_target(target)
