@@ -75,12 +75,14 @@ COPY_HANDLER = (
 # --- LaTeX of the mathematical objects ----------------------------------------------------
 
 
-def expr_latex(value: object) -> str:
+def expr_latex(value: sp.Basic | int | float) -> str:
     """LaTeX of one exact or floating-point expression (sympy's printer)."""
-    return sp.latex(sp.S(value))
+    return sp.latex(sp.sympify(value))
 
 
-def field_latex(components: Sequence[object], coordinates: Sequence[object]) -> str:
+def field_latex(
+    components: Sequence[sp.Expr | int | float], coordinates: Sequence[sp.Symbol]
+) -> str:
     r"""LaTeX of the vector field $\sum_j a_j\,\partial_{x_j}$ (``0`` for the zero field).
 
     Parameters
@@ -92,7 +94,7 @@ def field_latex(components: Sequence[object], coordinates: Sequence[object]) -> 
     """
     text = ""
     for a, x in zip(components, coordinates, strict=True):
-        a = sp.S(a)
+        a = sp.sympify(a)
         if a.is_zero:
             continue
         negative = a.could_extract_minus_sign()
@@ -115,7 +117,7 @@ def matrix_latex(rows: Any) -> str:
     """LaTeX ``pmatrix`` of a matrix (a sympy matrix or a sequence of rows)."""
     matrix = sp.Matrix(rows)
     body = r" \\ ".join(
-        " & ".join(expr_latex(matrix[i, j]) for j in range(matrix.cols))
+        " & ".join(sp.latex(matrix[i, j]) for j in range(matrix.cols))
         for i in range(matrix.rows)
     )
     return rf"\begin{{pmatrix}} {body} \end{{pmatrix}}"
@@ -128,7 +130,7 @@ def word_latex(word: Any, name: str = "X") -> str:
     return f"[{word_latex(word[0], name)}, {word_latex(word[1], name)}]"
 
 
-def _tuple_latex(values: Iterable[object]) -> str:
+def _tuple_latex(values: Iterable[sp.Basic | int | float]) -> str:
     return r"\left(" + ", ".join(expr_latex(v) for v in values) + r"\right)"
 
 
@@ -273,7 +275,7 @@ class Display:
 
 
 def _field_rows(
-    fields: Sequence[Sequence[object]], coordinates: Sequence[object], name: str
+    fields: Sequence[Sequence[sp.Expr]], coordinates: Sequence[sp.Symbol], name: str
 ) -> tuple[tuple[str, str], ...]:
     return tuple(
         (f"{name}_{{{i}}}", field_latex(f, coordinates)) for i, f in enumerate(fields, start=1)

@@ -281,7 +281,7 @@ def build_page(
                 formula(field_latex(brackets["vf", pair], vf.coordinates)),
             )
         )
-    brackets = (
+    brackets_html = (
         table(
             ("bracket", "name (Section 4)", "Section 4 fields, at 0", "eq. vf, at 0"),
             bracket_rows,
@@ -428,7 +428,7 @@ def build_page(
     sections = [
         ("summary", "Summary", summary),
         ("model", "The trident snake model", model),
-        ("brackets", "Brackets and growth vector", brackets),
+        ("brackets", "Brackets and growth vector", brackets_html),
         ("privileged", "Privileged coordinates and nilpotent approximation", privileged),
         ("motions", "Bracket motions (Figs 2–4)", "".join(motion_html)),
         ("comparison", "Original and approximation (Figs 5–7), animations", "".join(compare_html)),
