@@ -57,7 +57,8 @@ class Certificate:
     Attributes
     ----------
     orders:
-        Computed $\mathrm{ord}_p(y_j)$ of the privileged coordinates.
+        Computed $\mathrm{ord}_p(y_j)$ of the privileged coordinates
+        (``math.inf`` where no finite order was found, only when recomputed).
     weights:
         The weights $w_j$ at $p$.
     homogeneous:
@@ -89,7 +90,7 @@ class Certificate:
         Whether every decision above was exact (no numerical zero test).
     """
 
-    orders: tuple[int, ...]
+    orders: tuple[int | float, ...]
     weights: tuple[int, ...]
     homogeneous: bool
     nilpotent_step: int | None

@@ -67,6 +67,7 @@ import sympy as sp
 
 from nilpotent import typeset
 from nilpotent.core.brackets import word_field_symengine
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.filtration import Filtration, analyze
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
@@ -189,12 +190,12 @@ class PrivilegedCoordinates:
 
     def to_y(self, x: Sequence[object]) -> tuple[sp.Expr, ...]:
         """Privileged coordinates of a point given in model coordinates."""
-        subs = dict(zip(self.system.coordinates, (sp.S(v) for v in x), strict=True))
+        subs = dict(zip(self.system.coordinates, (as_expr(v) for v in x), strict=True))
         return tuple(sp.expand(e.xreplace(subs)) for e in self.forward)
 
     def to_x(self, y: Sequence[object]) -> tuple[sp.Expr, ...]:
         """Model coordinates of a point given in these coordinates (through ``inverse``)."""
-        subs = dict(zip(self.names, (sp.S(v) for v in y), strict=True))
+        subs = dict(zip(self.names, (as_expr(v) for v in y), strict=True))
         return tuple(sp.expand(e.xreplace(subs)) for e in self.inverse)
 
     def __str__(self) -> str:
@@ -755,6 +756,7 @@ def privileged_coordinates(
         name = method
         built = METHODS[method](ctx)
         orders, jets = _certified_orders(ctx, built[0], built[1])
+    assert orders is not None  # only quick=True returns None, and it was redone above
     bad = [(j, o, wj) for j, (o, wj) in enumerate(zip(orders, f.weights, strict=True)) if o != wj]
     names = coordinate_names(sys)
     if bad:

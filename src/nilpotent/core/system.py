@@ -22,6 +22,7 @@ from functools import cached_property
 import sympy as sp
 
 from nilpotent import typeset
+from nilpotent.core.expressions import as_expr
 from nilpotent.errors import ModelError
 
 Expr = sp.Expr
@@ -77,7 +78,7 @@ class ControlSystem:
         if dup:
             raise ModelError(f"model {self.name!r}: duplicate coordinates {', '.join(dup)}")
         # internal values (never user text: that goes through core.expressions)
-        flds = tuple(tuple(sp.S(e) for e in f) for f in self.fields)
+        flds = tuple(tuple(as_expr(e) for e in f) for f in self.fields)
         if not flds:
             raise ModelError(f"model {self.name!r}: no fields")
         for i, f in enumerate(flds, start=1):
@@ -86,7 +87,7 @@ class ControlSystem:
                     f"model {self.name!r}: field X{i} has {len(f)} components, "
                     f"expected {len(coords)} (one per coordinate)"
                 )
-        params = tuple((str(k), sp.S(v)) for k, v in dict(self.parameters).items())
+        params = tuple((str(k), as_expr(v)) for k, v in dict(self.parameters).items())
         clash = set(dict(params)) & set(names)
         if clash:
             raise ModelError(
@@ -129,7 +130,7 @@ class ControlSystem:
                 raise ModelError(
                     f"model {self.name!r} has no parameter {k!r} (parameters: {known})"
                 )
-            current[k] = sp.S(v)  # values are numbers, never user text
+            current[k] = as_expr(v)  # values are numbers, never user text
         return ControlSystem(
             self.name, self.coordinates, self.fields, tuple(current.items()), self.description
         )
@@ -137,10 +138,10 @@ class ControlSystem:
     @cached_property
     def specialized_fields(self) -> tuple[tuple[Expr, ...], ...]:
         """The fields with every parameter replaced by its value."""
-        subs = {sp.Symbol(k): v for k, v in self.parameters}
+        subs = [(sp.Symbol(k), v) for k, v in self.parameters]
         if not subs:
             return self.fields
-        return tuple(tuple(e.subs(subs) for e in f) for f in self.fields)
+        return tuple(tuple(as_expr(e.subs(subs)) for e in f) for f in self.fields)
 
     def specialized(self) -> ControlSystem:
         """The same system with the parameters substituted (and then dropped)."""
@@ -173,8 +174,8 @@ class ControlSystem:
                     f"model {self.name!r} has no coordinate {unknown[0]!r} "
                     f"(coordinates: {', '.join(names)})"
                 )
-            return tuple(sp.S(values.get(k, 0)) for k in names)
-        vals = tuple(sp.S(v) for v in values)
+            return tuple(as_expr(values.get(k, 0)) for k in names)
+        vals = tuple(as_expr(v) for v in values)
         if len(vals) != self.n:
             raise ModelError(f"a point of {self.name!r} has {self.n} coordinates, got {len(vals)}")
         return vals
