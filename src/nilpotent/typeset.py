@@ -168,12 +168,18 @@ def formula_html(latex: str, *, display: bool = False) -> str:
     """A formula as HTML: MathML with its LaTeX in ``data-latex`` and a "copy LaTeX" button.
 
     The element is ``<span class="formula" data-latex="...">`` holding the
-    ``<math>`` element and a ``<button class="copy-latex">``.
+    ``<math>`` element and a ``<button class="copy-latex">``; where
+    ``latex2mathml`` cannot read the formula, the LaTeX itself stands in a
+    ``<code>`` element instead of the ``<math>``.
     """
     tag = "div" if display else "span"
+    try:
+        body = mathml(latex, display=display)
+    except Exception:  # a construction latex2mathml does not know: show the LaTeX itself
+        body = f"<code>{html.escape(latex)}</code>"
     return (
         f'<{tag} class="formula" data-latex="{html.escape(latex, quote=True)}">'
-        f"{mathml(latex, display=display)}"
+        f"{body}"
         f'<button type="button" class="copy-latex" title="copy LaTeX" '
         f'onclick="{html.escape(COPY_HANDLER, quote=True)}">TeX</button></{tag}>'
     )
