@@ -20,6 +20,7 @@ import importlib.util
 import os
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
@@ -58,7 +59,9 @@ def content_key(*parts: str) -> str:
     return digest.hexdigest()[:20]
 
 
-def load_generated_module(stem: str, source: str | None, make_source=None) -> ModuleType:
+def load_generated_module(
+    stem: str, source: str | None, make_source: Callable[[], str] | None = None
+) -> ModuleType:
     """Import the generated module ``<cache>/<stem>.py``, writing it first if missing.
 
     Parameters
@@ -68,11 +71,21 @@ def load_generated_module(stem: str, source: str | None, make_source=None) -> Mo
     source, make_source:
         The module text, or a callable producing it (called only when the
         file does not exist yet, so cached runs skip code generation).
+
+    Raises
+    ------
+    ValueError
+        If neither ``source`` nor ``make_source`` is given (a programming error).
     """
     folder = cache_dir()
     path = folder / f"{stem}.py"
     if not path.exists():
-        text = source if source is not None else make_source()
+        if source is not None:
+            text = source
+        elif make_source is not None:
+            text = make_source()
+        else:
+            raise ValueError("load_generated_module needs source or make_source")
         fd, tmp = tempfile.mkstemp(prefix=f".{stem}.", suffix=".tmp", dir=folder)
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
             handle.write(text)

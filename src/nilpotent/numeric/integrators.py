@@ -267,9 +267,12 @@ def _numba_threads(threads: int | None) -> Iterator[None]:
         yield
         return
     import numba
+    from numba.core import config as numba_config
 
+    # NUMBA_NUM_THREADS is set on numba.core.config at import (invisible to type checkers)
+    limit = int(numba_config.NUMBA_NUM_THREADS)  # pyright: ignore[reportAttributeAccessIssue]
     previous = numba.get_num_threads()
-    numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
+    numba.set_num_threads(max(1, min(int(threads), limit)))
     try:
         yield
     finally:
@@ -495,7 +498,7 @@ def solve_function_input(
     system: CompiledSystem,
     x0: Any,
     u: Callable[[float], Any],
-    breakpoints: Sequence[float],
+    breakpoints: Sequence[float] | np.ndarray,
     *,
     times: Sequence[float] | np.ndarray | None = None,
     rtol: float = 1e-10,
