@@ -75,6 +75,7 @@ import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ModelError, OptionError
 
@@ -401,17 +402,19 @@ def paper_singular_locus() -> sp.Expr:
     rows = []
     for c, p in zip(PAPER_LEG_ANGLES, phis, strict=True):
         rows.append([_ONE, sp.sin(p + c) + sp.sin(c), sp.cos(p + c) + sp.cos(c)])
-    return sp.Matrix(rows).det()
+    return as_expr(sp.Matrix(rows).det())
 
 
 # --------------------------------------------------------------------------------------
 # Numeric geometry
 # --------------------------------------------------------------------------------------
 
-_FLOAT_OFFSETS = {
-    "body": tuple(float(a) for a in BODY_LEG_ANGLES),
-    "paper": tuple(float(a) for a in PAPER_LEG_ANGLES),
-}
+def _float_angles(angles: Sequence[sp.Expr | float]) -> tuple[float, float, float]:
+    a, b, c = (float(v) for v in angles)
+    return (a, b, c)
+
+
+_FLOAT_OFFSETS = {"body": _float_angles(BODY_LEG_ANGLES), "paper": _float_angles(PAPER_LEG_ANGLES)}
 
 
 def _configs(q: Configs) -> np.ndarray:
@@ -464,9 +467,9 @@ class TridentGeometry:
         r, l = float(self.r), float(self.l)
         if not (np.isfinite(r) and np.isfinite(l) and r > 0 and l > 0):
             raise ModelError(f"trident geometry needs r > 0 and l > 0, got r={r}, l={l}")
-        offs = tuple(float(a) for a in self.offsets)
-        if len(offs) != 3:
-            raise ModelError(f"trident geometry needs three leg offsets, got {len(offs)}")
+        if len(self.offsets) != 3:
+            raise ModelError(f"trident geometry needs three leg offsets, got {len(self.offsets)}")
+        offs = _float_angles(self.offsets)
         object.__setattr__(self, "r", r)
         object.__setattr__(self, "l", l)
         object.__setattr__(self, "offsets", offs)
