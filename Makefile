@@ -21,15 +21,15 @@ demo: $(STAMP)
 	@echo "open $(OUT)/index.html"
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check src tests benchmarks examples
+	$(VENV)/bin/ruff check src tests benchmarks examples docs/hooks
 
 export NO_MKDOCS_2_WARNING := 1
 
 test: $(STAMP)
-	$(VENV)/bin/ruff check src tests benchmarks examples
+	$(VENV)/bin/ruff check src tests benchmarks examples docs/hooks
 	$(VENV)/bin/pytest -n 2 --dist loadfile --nbmake tests docs/tutorial.ipynb
 	$(VENV)/bin/mkdocs build --strict --site-dir build/site
-	$(VENV)/bin/pyright src
+	$(VENV)/bin/pyright --pythonpath $(PY) src
 
 docs: $(STAMP)
 	$(VENV)/bin/mkdocs build --strict --site-dir build/site
