@@ -173,3 +173,23 @@ def test_screenshot(chromium: str, site: Path) -> None:
     assert done.returncode == 0, done.stderr[-2000:]
     assert shot.exists() and shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert shot.stat().st_size > 20_000  # a rendered page, not a blank image
+
+
+def test_notebook_displays_render_as_sized_mathml(chromium: str, tmp_path: Path) -> None:
+    """What Jupyter shows (``_repr_html_``) renders in the browser: every formula sized."""
+    import nilpotent as nil
+    from nilpotent.report.page import page
+
+    snake = nil.get_model("trident-snake")
+    approx = nil.approximate(snake)
+    shown = (snake, approx.filtration, approx.coordinates, approx)
+    sections = [(f"s{k}", type(obj).__name__, obj._repr_html_()) for k, obj in enumerate(shown)]
+    path = tmp_path / "reprs.html"
+    path.write_text(page("reprs", "notebook displays", sections), encoding="utf-8")
+    done = _run(chromium, "--virtual-time-budget=10000", "--dump-dom", path.as_uri())
+    assert done.returncode == 0, done.stderr[-2000:]
+    check = _attrs(done.stdout, "selfcheck")
+    assert check.get("data-done") == "true", check
+    assert int(check["data-formulas"]) >= 40, check
+    assert check["data-formulas-sized"] == check["data-formulas"], check
+    assert check["data-errors"] == "0" and _console_lines(done.stderr) == []
