@@ -5,7 +5,8 @@ approximations, simulations, sweeps, the paper reproduction):
 
 - on a terminal, a rich progress bar on stderr;
 - on a pipe or a file (CI, ``2> log``), plain lines ``nilpotent: <what>: <done>/<total>``,
-  at most one per :data:`PLAIN_INTERVAL` seconds (plus the first and the last);
+  at most one per :data:`PLAIN_INTERVAL` seconds (plus the first and the last), and a
+  line every :data:`HEARTBEAT` seconds of silence (``... still running, 12 s``);
 - nothing at all until :func:`configure` enables it (the CLI does; a notebook or a
   script may), so that library calls stay silent by default.
 
@@ -33,6 +34,10 @@ from typing import TextIO
 
 PLAIN_INTERVAL = 1.0
 """Seconds between two plain progress lines of one task (rate limit off a terminal)."""
+
+HEARTBEAT = 5.0
+"""Seconds of silence after which a plain progress line says the task is still running
+(so that a long step that reports nothing, an exact rank decision, still shows life)."""
 
 _state = {"enabled": False}
 _lock = threading.Lock()
@@ -68,6 +73,7 @@ class Progress:
     _last: float = field(default=0.0)
     _bar: object | None = None
     _task: object | None = None
+    _start: float = field(default=0.0)
 
     def advance(self, n: int = 1, detail: str | None = None) -> None:
         """Count ``n`` more units of work done (optionally with a short detail text)."""
@@ -156,8 +162,23 @@ def progress(
     task._stream = out
     task._emit(" (started)")
     task._last = time.monotonic()
-    start = task._last
+    start = task._start = task._last
+    stop = threading.Event()
+    beat = threading.Thread(target=_heartbeat, args=(task, stop), daemon=True)
+    beat.start()
     try:
         yield task
     finally:
+        stop.set()
+        beat.join()
         task._emit(f" (done in {time.monotonic() - start:.1f} s)")
+
+
+def _heartbeat(task: Progress, stop: threading.Event) -> None:
+    """Say that ``task`` is still running after :data:`HEARTBEAT` seconds of silence."""
+    while not stop.wait(min(HEARTBEAT, 1.0)):
+        now = time.monotonic()
+        if task._stream is None or now - task._last < HEARTBEAT:
+            continue
+        task._emit(f" (still running, {now - task._start:.0f} s)")
+        task._last = now
