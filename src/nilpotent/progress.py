@@ -5,8 +5,9 @@ approximations, simulations, sweeps, the paper reproduction):
 
 - on a terminal, a rich progress bar on stderr;
 - on a pipe or a file (CI, ``2> log``), plain lines ``nilpotent: <what>: <done>/<total>``,
-  at most one per :data:`PLAIN_INTERVAL` seconds (plus the first and the last), and a
-  line every :data:`HEARTBEAT` seconds of silence (``... still running, 12 s``);
+  at most one per :data:`PLAIN_INTERVAL` seconds, the first after :data:`PLAIN_INTERVAL`
+  seconds (a quick task prints nothing), a line every :data:`HEARTBEAT` seconds of
+  silence (``... (still running, 12 s)``) and a last one when a reported task ends;
 - nothing at all until :func:`configure` enables it (the CLI does; a notebook or a
   script may), so that library calls stay silent by default.
 
@@ -74,6 +75,7 @@ class Progress:
     _bar: object | None = None
     _task: object | None = None
     _start: float = field(default=0.0)
+    _emitted: bool = False
 
     def advance(self, n: int = 1, detail: str | None = None) -> None:
         """Count ``n`` more units of work done (optionally with a short detail text)."""
@@ -100,11 +102,14 @@ class Progress:
         return text
 
     def _emit(self, suffix: str = "") -> None:
-        count = f"{self.completed}/{self.total}" if self.total else f"{self.completed}"
-        line = f"nilpotent: {self._label()}: {count}{suffix}\n"
+        count = f"{self.completed}/{self.total}" if self.total else (
+            f"{self.completed}" if self.completed else "")
+        line = f"nilpotent: {self._label()}{': ' if count else ''}{count}{suffix}\n"
         with _lock:
+            self._emitted = True
             try:
-                assert self._stream is not None
+                if self._stream is None:
+                    return
                 self._stream.write(line)
                 self._stream.flush()
             except (OSError, ValueError):
@@ -160,9 +165,8 @@ def progress(
             yield task
         return
     task._stream = out
-    task._emit(" (started)")
-    task._last = time.monotonic()
-    start = task._start = task._last
+    task._last = time.monotonic()  # the first line comes after PLAIN_INTERVAL: a quick
+    start = task._start = task._last  # task prints nothing at all
     stop = threading.Event()
     beat = threading.Thread(target=_heartbeat, args=(task, stop), daemon=True)
     beat.start()
@@ -171,14 +175,20 @@ def progress(
     finally:
         stop.set()
         beat.join()
-        task._emit(f" (done in {time.monotonic() - start:.1f} s)")
+        if task._emitted:
+            task._emit(f" (done in {time.monotonic() - start:.1f} s)")
 
 
 def _heartbeat(task: Progress, stop: threading.Event) -> None:
     """Say that ``task`` is still running after :data:`HEARTBEAT` seconds of silence."""
-    while not stop.wait(min(HEARTBEAT, 1.0)):
+    while not stop.wait(min(HEARTBEAT, PLAIN_INTERVAL) / 2):
         now = time.monotonic()
-        if task._stream is None or now - task._last < HEARTBEAT:
+        quiet_for = now - task._last
+        if task._stream is None:
+            return
+        if task._emitted and quiet_for < HEARTBEAT:
+            continue
+        if not task._emitted and quiet_for < PLAIN_INTERVAL:
             continue
         task._emit(f" (still running, {now - task._start:.0f} s)")
         task._last = now
