@@ -80,7 +80,11 @@ def _wants_json(args: list[str]) -> bool:
     return False
 
 
+_received: dict[str, bool] = {"term": False}
+
+
 def _on_sigterm(signum, frame):  # pragma: no cover - exercised in a subprocess test
+    _received["term"] = True
     raise Terminated()
 
 
@@ -143,6 +147,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     debug = "--debug" in flags
     was_enabled = progress.enabled()
     progress.configure(enabled="--quiet" not in flags)
+    _received["term"] = False
     try:
         with _sigterm_as_interrupt():
             result = command.main(args=args, prog_name="nilpotent", standalone_mode=False)
@@ -154,7 +159,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.exit_code)
     except (typer.Abort, KeyboardInterrupt) as exc:
         cause = exc.__cause__ if isinstance(exc, typer.Abort) else exc
-        term = isinstance(cause, Terminated) or isinstance(exc, Terminated)
+        term = isinstance(cause, Terminated) or isinstance(exc, Terminated) or _received["term"]
         why = "terminated (SIGTERM)" if term else "interrupted"
         report_error("interrupted", f"{why}; partial outputs were removed", as_json)
         return EXIT_TERMINATED if term else EXIT_INTERRUPTED
