@@ -102,6 +102,13 @@ def _sigterm_as_interrupt():
         signal.signal(signal.SIGTERM, previous)
 
 
+def _interrupted(as_json: bool) -> int:
+    term = _received["term"]
+    why = "terminated (SIGTERM)" if term else "interrupted"
+    report_error("interrupted", f"{why}; partial outputs were removed", as_json)
+    return EXIT_TERMINATED if term else EXIT_INTERRUPTED
+
+
 def _internal_error(exc: BaseException, as_json: bool, debug: bool) -> int:
     what = f"{type(exc).__name__}: {literal(exc, 300)}"
     message = (
@@ -152,17 +159,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         with _sigterm_as_interrupt():
             result = command.main(args=args, prog_name="nilpotent", standalone_mode=False)
         code = int(result) if isinstance(result, int) else 0
+        if code == EXIT_INTERRUPTED:  # typer turns Ctrl-C (and our SIGTERM) into Exit(130)
+            return _interrupted(as_json)
         if code == 0 and sys.stdout is not None:
             sys.stdout.flush()
         return code
     except typer.Exit as exc:
+        if exc.exit_code == EXIT_INTERRUPTED:
+            return _interrupted(as_json)
         return int(exc.exit_code)
-    except (typer.Abort, KeyboardInterrupt) as exc:
-        cause = exc.__cause__ if isinstance(exc, typer.Abort) else exc
-        term = isinstance(cause, Terminated) or isinstance(exc, Terminated) or _received["term"]
-        why = "terminated (SIGTERM)" if term else "interrupted"
-        report_error("interrupted", f"{why}; partial outputs were removed", as_json)
-        return EXIT_TERMINATED if term else EXIT_INTERRUPTED
+    except (typer.Abort, KeyboardInterrupt):
+        return _interrupted(as_json)
     except typer.TyperException as exc:  # usage errors of the option parser
         return _usage_error(exc, as_json)
     except NilpotentError as exc:  # raised while parsing options (bounded integers, ...)
