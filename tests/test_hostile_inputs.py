@@ -386,3 +386,13 @@ def test_plan_json_with_undefined_distances_is_valid(run_cli):
     assert status == 0, err
     data = json.loads(out, parse_constant=lambda c: pytest.fail(f"JSON holds {c}"))
     assert data["error"] < 1e-8
+
+
+def test_a_closed_stdout_is_reported_before_the_work():
+    import shlex
+
+    command = " ".join(shlex.quote(a) for a in [*CLI, "analyze", "unicycle"]) + " >&-"
+    proc = subprocess.run(["bash", "-c", command], stderr=subprocess.PIPE, text=True,
+                          timeout=120, env=ENV)
+    assert proc.returncode == 2
+    assert "stdout is closed" in proc.stderr and "Traceback" not in proc.stderr

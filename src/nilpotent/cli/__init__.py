@@ -155,6 +155,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     was_enabled = progress.enabled()
     progress.configure(enabled="--quiet" not in flags)
     _received["term"] = False
+    if sys.stdout is None:  # started with stdout closed (>&-): no result could be shown
+        report_error("output", "stdout is closed: nothing could be printed (run without "
+                     "closing stdout, or redirect it to a file)", False)
+        progress.configure(enabled=was_enabled)
+        return EXIT_USAGE
     try:
         with _sigterm_as_interrupt():
             result = command.main(args=args, prog_name="nilpotent", standalone_mode=False)

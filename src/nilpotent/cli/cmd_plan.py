@@ -139,9 +139,12 @@ def plan_command(
 
         save_figure(plot_plan(result), plot, (system.name,))
     if animate is not None:
+        import matplotlib
+
         from nilpotent.planning.plotting import animate_plan
 
-        with write_atomically(animate) as tmp:
+        # the plan's figures use no mathtext: a model name such as $\frac{a}$ stays literal
+        with write_atomically(animate) as tmp, matplotlib.rc_context({"text.parse_math": False}):
             animate_plan(result, tmp)
     if json_out:
         emit_json(result.to_json())
