@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 import sympy as sp
+from hypothesis import given
+from hypothesis import strategies as st
 
 from nilpotent.errors import ComputationLimitError, ModelError
 
@@ -396,3 +398,61 @@ def test_a_closed_stdout_is_reported_before_the_work():
                           timeout=120, env=ENV)
     assert proc.returncode == 2
     assert "stdout is closed" in proc.stderr and "Traceback" not in proc.stderr
+
+
+# --- unseen inputs of each kind (properties) ---------------------------------------------
+
+
+@given(st.one_of(st.text(max_size=60), st.integers().map(str),
+                 st.text(alphabet="0123456789", min_size=1, max_size=6000)))
+def test_bounded_integer_options_answer_every_text(text):
+    import typer
+
+    from nilpotent.cli.app import bounded_int
+    from nilpotent.errors import NilpotentError
+
+    parse = bounded_int("--periods", 1, 1000)
+    try:
+        value = parse(text)
+    except (typer.BadParameter, NilpotentError):
+        return
+    assert 1 <= value <= 1000
+
+
+@given(st.text())
+def test_literal_never_lets_a_control_character_through(text):
+    from nilpotent.cli.app import literal
+
+    shown = literal(text, 300)
+    assert all(ch.isprintable() for ch in shown)
+    assert len(shown) <= 300 + 40
+
+
+@given(st.recursive(
+    st.one_of(st.floats(), st.integers(min_value=-(10**30), max_value=10**30), st.text(),
+              st.none(), st.booleans()),
+    lambda inner: st.one_of(st.lists(inner, max_size=4),
+                            st.dictionaries(st.text(max_size=5), inner, max_size=4)),
+    max_leaves=20))
+def test_json_text_is_always_strict_json(obj):
+    from nilpotent.cli.app import json_text
+
+    def refuse(constant):
+        raise AssertionError(f"JSON holds {constant}")
+
+    json.loads(json_text(obj), parse_constant=refuse)
+
+
+def test_stale_temporary_folders_of_dead_runs_are_removed(tmp_path):
+    from nilpotent.outputs import remove_stale_temporaries
+
+    target = tmp_path / "paper"
+    stale = tmp_path / ".paper.tmp.999999999.x1"
+    stale.mkdir()
+    (stale / "index.html").write_text("half")
+    old = tmp_path / ".paper.old.999999999.x2"
+    old.mkdir()
+    mine = tmp_path / f".paper.tmp.{os.getpid()}.x3"
+    mine.mkdir()
+    assert set(remove_stale_temporaries(target)) == {stale, old}
+    assert mine.is_dir()
