@@ -301,7 +301,9 @@ def test_a_tampered_world_writable_cache_is_never_imported(tmp_path, monkeypatch
     (folder / "np_planted1.py").write_text(planted)
     monkeypatch.setenv("NILPOTENT_CACHE", str(folder))
     assert cache.safe_folder(folder) is not None
-    assert cache.cache_dir() != folder
+    monkeypatch.delitem(cache._private, "warned", raising=False)
+    with pytest.warns(RuntimeWarning, match="writable by others"):
+        assert cache.cache_dir() != folder
     module = cache.load_generated_module("np_planted1", "VALUE = 'ours'\n")
     assert module.VALUE == "ours" and not marker.exists()
 

@@ -32,6 +32,7 @@ import shutil
 import stat
 import sys
 import tempfile
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
@@ -39,7 +40,7 @@ from types import ModuleType
 #: Bumped whenever the code generators change what they write.
 GENERATOR_VERSION = "2"
 
-_private: dict[str, Path] = {}
+_private: dict[str, Path] = {}  # the private folder and the folder already warned about
 
 
 def safe_folder(folder: Path) -> str | None:
@@ -98,6 +99,15 @@ def cache_dir() -> Path:
         folder = base / "nilpotent"
     if _usable(folder):
         return folder
+    if "warned" not in _private:
+        _private["warned"] = folder
+        why = safe_folder(folder) or "it cannot be created or written"
+        warnings.warn(
+            f"nilpotent: not using the code cache {folder}: {why}; generated code goes to a "
+            "private temporary folder (no cache between runs). Fix: chmod 700 the folder, "
+            "or set NILPOTENT_CACHE to a folder of your own",
+            RuntimeWarning, stacklevel=2,
+        )
     return _private_folder()
 
 
