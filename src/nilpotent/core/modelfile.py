@@ -53,6 +53,7 @@ from nilpotent.core.expressions import (
 )
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, ExpressionError, ModelError
+from nilpotent.strict_json import json_text
 
 __all__ = [
     "ALLOWED_KEYS",
@@ -551,7 +552,7 @@ def dump_model_file(sys: ControlSystem, path: str | Path) -> None:
     path = Path(path)
     suffix = _suffix(path)
     data = system_to_dict(sys)
-    text = _to_toml(data) if suffix == ".toml" else json.dumps(data, indent=2) + "\n"
+    text = _to_toml(data) if suffix == ".toml" else json_text(data)
     try:
         path.write_text(text, encoding="utf-8")
     except OSError as exc:

@@ -167,7 +167,9 @@ def _fmt(value: Any) -> str:
 
 
 def _write_json(path: Path, obj: Any) -> Path:
-    path.write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    from nilpotent.strict_json import json_text
+
+    path.write_text(json_text(obj), encoding="utf-8")
     return path
 
 
