@@ -56,7 +56,7 @@ def enabled() -> bool:
 
 def _plain_text(text: str, limit: int = 200) -> str:
     """``text`` with control characters removed and its length bounded (user text is printed)."""
-    clean = "".join(ch if ch.isprintable() else "?" for ch in text)
+    clean = "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
     if len(clean) > limit:
         clean = clean[:limit] + f"... ({len(clean) - limit} more characters)"
     return clean
