@@ -72,9 +72,9 @@ def test_unwritable_outputs_are_refused_before_the_work(run_cli, tmp_path):
         status, out, err = run_cli("simulate", "unicycle", "--bracket", "1,2",
                                    "--amplitude", "0.1", "--plot", str(target), "--json")
         assert status == 2, err
-        assert _json_error(out)["kind"] == "output"
+        assert _json_error(out)["kind"] == "option"
     status, out, _ = run_cli("reproduce", "--quick", "--out", "/proc/nilpotent-x", "--json")
-    assert status == 2 and _json_error(out)["kind"] == "output"
+    assert status == 2 and _json_error(out)["kind"] == "option"
     assert list(tmp_path.iterdir()) == [folder]
 
 

@@ -5,7 +5,8 @@ through this module, so that:
 
 - a path that cannot be written (a missing or read-only folder, a folder where a
   file is expected, ``/proc/...``) is refused *before* the work, by
-  :func:`check_writable`, with an :class:`~nilpotent.errors.OutputError`;
+  :func:`check_writable`, with an :class:`~nilpotent.errors.OptionError` (kind
+  ``option``: the option's value is unusable);
 - a file is written whole or not at all (:func:`write_atomically`: a temporary
   file beside the target, renamed into place on success, removed on failure,
   on Ctrl-C and on SIGTERM, which the CLI turns into the same interruption);
@@ -27,7 +28,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from nilpotent.errors import OutputError
+from nilpotent.errors import OptionError, OutputError
 
 __all__ = [
     "check_writable",
@@ -130,28 +131,28 @@ def check_writable(path: str | os.PathLike[str] | None, option: str, *, folder: 
 
     Raises
     ------
-    OutputError
-        With the option, the path and the reason.
+    OptionError
+        With the option, the path and the reason (the option's value is unusable).
     """
     if path is None:
         return
     target = Path(path)
     where = f"{option} {shown_path(target)}"
     if (not target.name or target.name in (".", "..")) and not folder:
-        raise OutputError(f"{where}: a file name is needed, not a folder")
+        raise OptionError(f"{where}: a file name is needed, not a folder")
     if target.is_dir() and not folder:
-        raise OutputError(f"{where}: is a folder (give a file name)")
+        raise OptionError(f"{where}: is a folder (give a file name)")
     if target.exists() and folder and not target.is_dir():
-        raise OutputError(f"{where}: exists and is not a folder")
+        raise OptionError(f"{where}: exists and is not a folder")
     if target.exists() and not folder and not target.is_file():
-        raise OutputError(f"{where}: exists and is not a regular file")
+        raise OptionError(f"{where}: exists and is not a regular file")
     parent = target.parent if str(target.parent) else Path(".")
     if not parent.is_dir():
-        raise OutputError(f"{where}: folder {shown_path(parent)} does not exist")
+        raise OptionError(f"{where}: folder {shown_path(parent)} does not exist")
     try:
         fd, probe = tempfile.mkstemp(prefix=temporary_prefix(target), dir=parent)
     except OSError as exc:
-        raise OutputError(f"{where}: cannot write in {shown_path(parent)} ({_reason(exc)})"
+        raise OptionError(f"{where}: cannot write in {shown_path(parent)} ({_reason(exc)})"
                           ) from None
     os.close(fd)
     with contextlib.suppress(OSError):
@@ -174,10 +175,10 @@ def write_atomically(path: str | os.PathLike[str], suffix: str | None = None) ->
     target = Path(path)
     parent = target.parent if str(target.parent) else Path(".")
     if not parent.is_dir():
-        raise OutputError(
+        raise OptionError(
             f"cannot write {shown_path(target)}: folder {shown_path(parent)} does not exist")
     if target.is_dir():
-        raise OutputError(f"cannot write {shown_path(target)}: it is a folder")
+        raise OptionError(f"cannot write {shown_path(target)}: it is a folder")
     remove_stale_temporaries(target)
     try:
         fd, tmp = tempfile.mkstemp(
