@@ -5,6 +5,7 @@ traceback, nothing half written, user text printed literally."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -458,3 +459,33 @@ def test_stale_temporary_folders_of_dead_runs_are_removed(tmp_path):
     mine.mkdir()
     assert set(remove_stale_temporaries(target)) == {stale, old}
     assert mine.is_dir()
+
+
+_JSONISH = st.recursive(
+    st.one_of(st.none(), st.booleans(), st.integers(), st.floats(), st.text(max_size=12),
+              st.sampled_from(["x", "y", "cos(x)", "x**2", "1/0", "[/bold]", "\x1b[2J", "х"])),
+    lambda inner: st.one_of(st.lists(inner, max_size=4),
+                            st.dictionaries(st.sampled_from(["x", "y", "х", "z", "1"]) | st.text(
+                                max_size=4), inner, max_size=4)),
+    max_leaves=12,
+)
+
+
+@given(st.fixed_dictionaries(
+    {},
+    optional={
+        "name": _JSONISH,
+        "coordinates": st.one_of(_JSONISH, st.lists(st.sampled_from(["x", "y", "х", "z"]),
+                                                    max_size=4)),
+        "parameters": _JSONISH,
+        "fields": st.one_of(_JSONISH, st.lists(st.dictionaries(
+            st.sampled_from(["x", "y", "z"]), _JSONISH, max_size=3), max_size=3)),
+    },
+))
+def test_any_model_structure_is_accepted_or_refused_clearly(data):
+    from nilpotent.core.modelfile import system_from_dict
+    from nilpotent.errors import NilpotentError
+
+    with contextlib.suppress(NilpotentError):
+        system_from_dict(data, "fuzz.json")
+
