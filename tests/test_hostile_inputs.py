@@ -248,9 +248,10 @@ def test_sigterm_is_handled_like_ctrl_c_and_leaves_no_partial_file(tmp_path):
          "--samples", "200000", "--radius", "0.1", "--out", str(out), "--json"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,
     )
-    time.sleep(6)
+    first = proc.stderr.readline()  # the first progress line: the sweep is under way
+    assert "bracket motions" in first, first
     proc.send_signal(signal.SIGTERM)
-    stdout, stderr = proc.communicate(timeout=60)
+    stdout, stderr = proc.communicate(timeout=120)
     if proc.returncode == 0:
         pytest.skip("the sweep finished before the signal")
     assert proc.returncode == 143, stderr
