@@ -330,8 +330,8 @@ class _Parser:
                 raise self.fail("complex value (expressions must be real)", node)
             if isinstance(part, sp.Float) and not math.isfinite(float(part)):
                 raise self.fail("number too large (outside the range of a double)", node)
-            if part.is_Rational and max(int(part.p).bit_length(),
-                                        int(part.q).bit_length()) > MAX_BITS:
+            if isinstance(part, sp.Rational) and max(int(part.p).bit_length(),
+                                                     int(part.q).bit_length()) > MAX_BITS:
                 raise self.fail(f"exact number too large (more than {MAX_BITS} bits)", node)
         return value
 
@@ -439,10 +439,10 @@ def expanded_terms(expr: sp.Basic) -> int:
             value = sum(count(a) for a in e.args)
         elif e.is_Mul:
             value = math.prod(count(a) for a in e.args)
-        elif e.is_Pow:
+        elif isinstance(e, sp.Pow):
             k = count(e.base)
             x = e.exp
-            if x.is_Integer and k > 1:
+            if isinstance(x, sp.Integer) and k > 1:
                 n = abs(int(x))
                 value = math.comb(k + n - 1, n) if n < 10_000 else cap
             else:
