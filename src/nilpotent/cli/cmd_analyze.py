@@ -21,28 +21,8 @@ from nilpotent.cli.app import (
 
 
 def analysis_payload(system, filtration) -> dict[str, Any]:
-    """The ``nilpotent/analysis@1`` JSON object of a filtration (INTERFACE.md)."""
-    from nilpotent.core.brackets import format_word
-    from nilpotent.core.expressions import format_expression
-    from nilpotent.core.points import format_point
-
-    return {
-        "schema": "nilpotent/analysis@1",
-        "model": system.name,
-        "coordinates": list(system.coordinate_names),
-        "parameters": {k: format_expression(v) for k, v in system.parameters},
-        "point": format_point(system, filtration.point),
-        "bracket_generating": filtration.bracket_generating,
-        "growth_vector": list(filtration.growth_vector),
-        "weights": list(filtration.weights),
-        "step": filtration.step,
-        "regular": filtration.regular,
-        "generic_growth_vector": list(filtration.generic_growth_vector),
-        "exact": filtration.exact,
-        "max_length": filtration.max_length,
-        "frame": [format_word(w) for w in filtration.frame],
-        "frame_values": [[format_expression(v) for v in col] for col in filtration.frame_values],
-    }
+    """The ``nilpotent/analysis@1`` JSON object of a filtration (``Filtration.to_json``)."""
+    return filtration.to_json()
 
 
 def print_analysis(system, filtration) -> None:
@@ -57,24 +37,36 @@ def print_analysis(system, filtration) -> None:
         for n, v in zip(system.coordinate_names, filtration.point, strict=True)
     )
     console.print(f"[bold]{system.name}[/bold] at ({pt})")
-    verdict = "yes" if filtration.bracket_generating else (
-        "NO: the brackets span only "
-        f"{filtration.growth_vector[-1] if filtration.growth_vector else 0}"
-        f" of {system.n} dimensions"
-    )
-    if not filtration.bracket_generating and filtration.generic_growth_vector[-1] == system.n:
-        verdict += (
-            f" at the point with brackets of length <= {filtration.max_length}, while they "
-            "span everything at nearby points (a longer bracket may still add a direction: "
-            "--max-length)"
+    reached = filtration.growth_vector[-1] if filtration.growth_vector else 0
+    if filtration.bracket_generating:
+        verdict = "yes"
+    elif filtration.bracket_generating is False:
+        verdict = (
+            f"NO: the brackets span only {reached} of {system.n} dimensions (also at every "
+            "nearby point)"
         )
-    console.print(f"bracket generating: {verdict}")
+    else:
+        verdict = (
+            f"UNDETERMINED: brackets of length <= {filtration.max_length} span {reached} of "
+            f"{system.n} dimensions at the point"
+        )
+    console.print(f"bracket generating: {verdict}", markup=False)
+    und = filtration.undetermined
+    if und is not None:
+        console.print(
+            f"undetermined: {und['reason']} (ball precision reached: {und['precision_bits']} "
+            f"bits; search further with --max-length)",
+            markup=False,
+        )
     console.print(f"growth vector: ({', '.join(map(str, filtration.growth_vector))})")
     console.print(f"weights: ({', '.join(map(str, filtration.weights))})   step: {filtration.step}")
-    regular = "regular" if filtration.regular else (
-        "SINGULAR (generic growth vector nearby: "
-        f"({', '.join(map(str, filtration.generic_growth_vector))}))"
-    )
+    nearby = ", ".join(map(str, filtration.generic_growth_vector))
+    if filtration.regular is None:
+        regular = f"UNDETERMINED (generic growth vector nearby: ({nearby}))"
+    elif filtration.regular:
+        regular = "regular"
+    else:
+        regular = f"SINGULAR (generic growth vector nearby: ({nearby}))"
     console.print(f"point: {regular}")
     table = Table(title="adapted frame Y_j (value at the point)")
     table.add_column("j")
@@ -103,8 +95,9 @@ def analyze_command(
         typer.Option(
             "--max-length",
             min=1,
-            help="Longest bracket length examined at the point (default: 2n+2, at least 12, "
-            "within a budget of Hall words); matters only at singular points.",
+            help="Longest bracket length examined at the point (default: automatic, from "
+            "max(2n+2, 12) raised while the Hall words fit a budget); matters only at "
+            "singular points.",
         ),
     ] = None,
     singular_locus: Annotated[
