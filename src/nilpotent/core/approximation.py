@@ -36,6 +36,7 @@ from nilpotent.core.privileged import (
     exponential_grading,
     privileged_coordinates,
 )
+from nilpotent.core.spans import Decision, ExprVector, MeasuredSpan, Span
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
     Poly,
@@ -244,6 +245,48 @@ class NilpotentApproximation:
         lines += ["  " + s for s in str(self.certificate).splitlines()]
         return "\n".join(lines)
 
+    def to_json(self) -> dict[str, object]:
+        """The ``nilpotent/approximation@1`` JSON object (``INTERFACE.md``).
+
+        The analysis@1 keys of the filtration, plus ``method``, ``privileged``
+        (names, expressions, inverse, exactness), ``fields``, ``fields_x`` and
+        ``certificate``.
+        """
+        from nilpotent.core.expressions import format_expression
+
+        coords = self.coordinates
+        cert = self.certificate
+        payload = self.filtration.to_json()
+        payload["schema"] = "nilpotent/approximation@1"
+        payload["method"] = coords.method
+        payload["privileged"] = {
+            "names": [str(s) for s in coords.names],
+            "expressions": [format_expression(e) for e in coords.forward],
+            "inverse": [format_expression(e) for e in coords.inverse],
+            "inverse_exact": coords.inverse_exact,
+            "forward_exact": coords.forward_exact,
+            "numeric": coords.numeric,
+        }
+        payload["fields"] = [[format_expression(c) for c in f] for f in self.fields]
+        payload["fields_x"] = [[format_expression(c) for c in f] for f in self.fields_x]
+        payload["certificate"] = {
+            "orders": list(cert.orders),
+            "weights": list(cert.weights),
+            "nilpotent_step": cert.nilpotent_step,
+            "homogeneous": cert.homogeneous,
+            "growth_vector_at_0": list(cert.growth_vector_at_0),
+            "remainder_order_ok": cert.remainder_order_ok,
+            "remainder_orders": list(cert.remainder_orders),
+            "step": cert.step,
+            "growth_vector": list(cert.growth_vector),
+            "pushforward_ok": cert.pushforward_ok,
+            "privileged": cert.privileged,
+            "exact": cert.exact,
+            "ok": cert.ok,
+            "failures": list(cert.failures()),
+        }
+        return payload
+
     def to_latex(self) -> str:
         """The coordinates and both forms of the fields as a LaTeX ``align*`` block."""
         coords = self.coordinates
@@ -317,37 +360,44 @@ def _homogeneous(
 
 
 class _Echelon:
-    """Incremental linear independence of sparse vectors with exact coefficients."""
+    """Incremental rank of sparse coefficient vectors, through :mod:`nilpotent.core.spans`.
+
+    Exact coefficients are decided by the certified engine (:class:`Span`);
+    floating-point coefficients (approximations at transcendental points) by a
+    scale-invariant :class:`MeasuredSpan`.  Every decision that is not proved
+    (floats, or *undetermined*) is counted in ``zero.numeric_decisions``, so
+    that the certificate says it was not exact.
+    """
 
     def __init__(self, zero: ZeroTest) -> None:
-        self.rows: list[tuple[object, dict]] = []
         self.zero = zero
-
-    def reduce(self, vec: dict) -> dict:
-        v = {k: c for k, c in vec.items() if not self.zero(c)}
-        for piv, row in self.rows:
-            c = v.get(piv)
-            if c is None:
-                continue
-            factor = c / row[piv]
-            for k, rc in row.items():
-                nv = se.expand(v.get(k, 0) - factor * rc)
-                if self.zero(nv):
-                    v.pop(k, None)
-                else:
-                    v[k] = nv
-        return v
+        self.span = Span()
+        self.measured: MeasuredSpan | None = None
 
     def add(self, vec: dict) -> bool:
-        v = self.reduce(vec)
+        v = {k: c for k, c in vec.items() if c != 0}
         if not v:
             return False
-        self.rows.append((min(v, key=repr), v))
-        return True
+        if self.measured is not None or any(_is_float(c) for c in v.values()):
+            if self.measured is None:
+                self.measured = MeasuredSpan()
+                for old in self.span.vectors:
+                    self.measured.try_add(old.entries)  # type: ignore[attr-defined]
+            self.zero.numeric_decisions += 1
+            return self.measured.try_add(v)
+        decision = self.span.add(ExprVector(v))
+        if decision is Decision.UNDETERMINED:
+            self.zero.numeric_decisions += 1
+        return decision is Decision.INDEPENDENT
 
     @property
     def rank(self) -> int:
-        return len(self.rows)
+        return self.measured.rank if self.measured is not None else self.span.rank
+
+
+def _is_float(c: object) -> bool:
+    e = se.S(c)
+    return isinstance(e, se.RealDouble) or bool(e.atoms(se.RealDouble))
 
 
 def _field_vector(field: Sequence[Poly]) -> dict:
@@ -532,6 +582,7 @@ def approximate(
     method: str = "auto",
     *,
     numeric: bool | None = None,
+    max_length: int | None = None,
 ) -> NilpotentApproximation:
     r"""The nilpotent approximation of ``sys`` at ``point``, with its computed certificate.
 
@@ -549,6 +600,10 @@ def approximate(
         ``None`` (default) for exact unless the values at the point are
         transcendental (see :func:`~nilpotent.core.privileged.privileged_coordinates`);
         ``coordinates.numeric`` and the printed output say which.
+    max_length:
+        Longest bracket length examined at $p$ (default automatic: raised
+        within a budget while the search is exhausted before the dimension;
+        see :func:`~nilpotent.core.filtration.analyze`).
 
     Returns
     -------
@@ -560,6 +615,8 @@ def approximate(
         ``method="linear"`` where linear adapted coordinates are not privileged.
     NotBracketGeneratingError
         If the system is not bracket-generating at the point.
+    ComputationLimitError
+        If whether it is bracket-generating stays undetermined within the budget.
 
     Examples
     --------
@@ -571,7 +628,7 @@ def approximate(
     >>> a.certificate.ok
     True
     """
-    coords = privileged_coordinates(sys, point, method, numeric=numeric)
+    coords = privileged_coordinates(sys, point, method, numeric=numeric, max_length=max_length)
     w = coords.weights
     ctx = _Context.of(coords.filtration, coords.numeric)
     jets = coords.field_jets(extra=1)

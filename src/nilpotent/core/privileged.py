@@ -67,6 +67,7 @@ import sympy as sp
 
 from nilpotent.core.brackets import word_field_symengine
 from nilpotent.core.filtration import Filtration, analyze
+from nilpotent.core.spans import to_double
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
     Poly,
@@ -76,7 +77,12 @@ from nilpotent.core.taylor import (
     weighted_degree,
     weighted_jets,
 )
-from nilpotent.errors import NotBracketGeneratingError, NotPrivilegedError, OptionError
+from nilpotent.errors import (
+    ComputationLimitError,
+    NotBracketGeneratingError,
+    NotPrivilegedError,
+    OptionError,
+)
 
 __all__ = ["METHODS", "PrivilegedCoordinates", "coordinate_names", "privileged_coordinates"]
 
@@ -274,8 +280,8 @@ class _Context:
 
 
 def _to_float(value: sp.Expr) -> sp.Float:
-    """A 15-digit float of an exact value (evaluated by symengine: fast on large expressions)."""
-    return sp.Float(float(to_symengine(value).n()), 15)
+    """A 15-digit float of an exact value (from a certified ball, :func:`spans.to_double`)."""
+    return sp.Float(to_double(value), 15)
 
 
 def _identity(n: int) -> tuple[Poly, ...]:
@@ -666,6 +672,7 @@ def privileged_coordinates(
     filtration: Filtration | None = None,
     *,
     numeric: bool | None = None,
+    max_length: int | None = None,
 ) -> PrivilegedCoordinates:
     r"""Privileged coordinates of ``sys`` at ``point``, with computed orders.
 
@@ -686,6 +693,10 @@ def privileged_coordinates(
         (``cos(1/5)``) or floats, where exact arithmetic cannot simplify
         ($\sin^2 + \cos^2$ is not recognised as 1) and expressions swell; the
         result says which in ``numeric``.
+    max_length:
+        Longest bracket length examined at $p$ (see
+        :func:`~nilpotent.core.filtration.analyze`; default automatic, raised
+        within a budget while the search is exhausted before the dimension).
 
     Returns
     -------
@@ -699,6 +710,9 @@ def privileged_coordinates(
         (the message names each coordinate whose computed order differs from its weight).
     NotBracketGeneratingError
         If the system is not bracket-generating at $p$.
+    ComputationLimitError
+        If whether it is bracket-generating at $p$ stays undetermined within the
+        budget (the message says what was tried and how to search further).
     OptionError
         Unknown method.
 
@@ -715,7 +729,14 @@ def privileged_coordinates(
             f"unknown privileged-coordinates method {method!r}; choose one of "
             f"auto, {', '.join(METHODS)}"
         )
-    f = filtration if filtration is not None else analyze(sys, point)
+    f = filtration if filtration is not None else analyze(sys, point, max_length=max_length)
+    if f.bracket_generating is None:
+        und = f.undetermined or {}
+        raise ComputationLimitError(
+            f"whether {sys.name!r} is bracket-generating at the point is undetermined: "
+            f"{und.get('reason', '')}; no privileged coordinates (search longer brackets "
+            "with max_length, CLI --max-length)"
+        )
     if not f.bracket_generating:
         raise NotBracketGeneratingError(
             f"{sys.name!r} is not bracket-generating at the point: its brackets span "

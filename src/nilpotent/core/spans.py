@@ -57,6 +57,7 @@ __all__ = [
     "Evaluator",
     "ExprVector",
     "Inaccurate",
+    "MeasuredSpan",
     "NotEvaluable",
     "NotRational",
     "Span",
@@ -68,6 +69,7 @@ __all__ = [
     "is_zero",
     "numeric_rank",
     "rank",
+    "to_double",
 ]
 
 START_PRECISION_BITS = 64
@@ -446,6 +448,22 @@ def ball(e: object, prec: int = START_PRECISION_BITS) -> arb:
         flint.ctx.prec = old
 
 
+def to_double(e: object) -> float:
+    """The double nearest to a real constant expression (from a certified 64-bit ball).
+
+    Raises
+    ------
+    NotEvaluable
+        If the value is complex, undefined, or cannot be enclosed.
+    """
+    b = ball(e, 64)
+    if not b.is_finite():
+        b = ball(e, 256)
+    if not b.is_finite():
+        raise NotEvaluable(f"cannot evaluate {e}")
+    return float(b.mid())
+
+
 # --- vectors --------------------------------------------------------------------------------
 
 Key = object
@@ -737,6 +755,43 @@ def rank(vectors: Sequence[Sequence[object]]) -> tuple[int, int]:
         if span.add(v) is Decision.UNDETERMINED:
             undetermined += 1
     return span.rank, span.rank + undetermined
+
+
+class MeasuredSpan:
+    """Incremental span of vectors of floating-point *measurements* (not exact values).
+
+    For values known only to rounding (coefficients computed in floating point
+    at a transcendental point, numerical Jacobians) no decision can be
+    certified; this span is scale-invariant (each vector normalised to unit
+    length) and calls a vector new when its distance to the span exceeds
+    ``rel_tol``.  :attr:`rank` counts the kept vectors.
+    """
+
+    def __init__(self, rel_tol: float = 1e-9) -> None:
+        self.rel_tol = rel_tol
+        self.keys: dict[Key, int] = {}
+        self.basis: list[dict[Key, float]] = []
+
+    @property
+    def rank(self) -> int:
+        return len(self.basis)
+
+    def try_add(self, vec: Mapping[Key, object]) -> bool:
+        v = {k: to_double(x) for k, x in vec.items()}
+        norm = sum(x * x for x in v.values()) ** 0.5
+        if norm == 0.0 or norm != norm:
+            return False
+        u = {k: x / norm for k, x in v.items()}
+        for _ in range(2):
+            for b in self.basis:
+                c = sum(x * b.get(k, 0.0) for k, x in u.items())
+                for k, bx in b.items():
+                    u[k] = u.get(k, 0.0) - c * bx
+        dist = sum(x * x for x in u.values()) ** 0.5
+        if dist <= self.rel_tol:
+            return False
+        self.basis.append({k: x / dist for k, x in u.items()})
+        return True
 
 
 def numeric_rank(rows: Sequence[Sequence[float]], rel_tol: float = 1e-9) -> int:

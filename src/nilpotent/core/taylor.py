@@ -33,6 +33,7 @@ from collections.abc import Iterable, Mapping, Sequence
 import symengine as se
 import sympy as sp
 
+from nilpotent.core.spans import to_double
 from nilpotent.errors import PointError
 
 Monomial = tuple[int, ...]
@@ -455,5 +456,8 @@ def weighted_jets(
             ) from exc
         out.append(acc.truncate(weights, degree))
     if numeric:
-        out = [Poly(p.nvars, {m: c.n() for m, c in p.terms.items()}) for p in out]
+        out = [
+            Poly(p.nvars, {m: se.RealDouble(to_double(c)) for m, c in p.terms.items()})
+            for p in out
+        ]
     return out
