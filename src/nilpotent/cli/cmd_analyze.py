@@ -104,27 +104,34 @@ def analyze_command(
         bool,
         typer.Option(
             "--singular-locus",
-            help="Also give the singular locus: the determinant of the adapted frame "
-            "(only where the frame is square).",
+            help="Also give the singular locus: the common zeros of the determinants of "
+            "the adapted frames with the generic weights (simplified).",
         ),
     ] = False,
     json_out: JsonOpt = False,
 ) -> None:
     """Growth vector, weights, step, adapted frame and regular/singular verdict at a point."""
+    from nilpotent.core.brackets import format_word
     from nilpotent.core.expressions import format_expression
     from nilpotent.core.filtration import analyze
-    from nilpotent.core.filtration import singular_locus as locus_of
+    from nilpotent.core.singular import singular_set
 
     system = load_model_option(model, param)
     point = parse_point_option(at, system)
     filtration = analyze(system, point, max_length=max_length)
-    locus = locus_of(system, filtration) if singular_locus else None
+    locus = singular_set(system, filtration.generic_growth_vector) if singular_locus else None
     if json_out:
         payload = analysis_payload(system, filtration)
         if locus is not None:
-            payload["singular_locus"] = format_expression(locus)
+            payload["singular_locus"] = format_expression(locus.equation)
+            payload["singular_locus_equations"] = [format_expression(e) for e in locus.equations]
+            payload["singular_locus_statement"] = locus.statement()
+            payload["singular_locus_determinants"] = [
+                {"frame": [format_word(w) for w in frame], "determinant": format_expression(d)}
+                for frame, d in locus.determinants
+            ]
         emit_json(payload)
         return
     print_analysis(system, filtration)
     if locus is not None:
-        stdout_console().print(f"singular locus: {format_expression(locus)} = 0")
+        stdout_console().print(f"singular locus: {locus.statement()}", markup=False)

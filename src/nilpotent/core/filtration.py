@@ -71,9 +71,7 @@ from nilpotent.core.spans import (
 )
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import (
-    ComputationLimitError,
     ModelError,
-    NotBracketGeneratingError,
     PointError,
 )
 from nilpotent.progress import progress
@@ -692,50 +690,30 @@ def _mobius(k: int) -> int:
 
 
 def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> sp.Expr:
-    """The determinant of the adapted frame's fields, as an expression in the coordinates.
+    """One expression whose zero set is the singular locus near ``filtration``'s point.
 
-    Where this determinant is non-zero the frame words of ``filtration`` (by
-    default ``analyze(sys)`` at the origin) are a basis adapted to the generic
-    filtration, so the point is regular; its zero set therefore *contains* the
-    singular points (it may also contain regular points where another frame
-    would be needed).  Needs a square frame, i.e. a bracket-generating system.
+    The locus is computed from the generic frames
+    (:func:`nilpotent.core.singular.singular_set`: the common zeros of the
+    determinants of every adapted frame of Hall words with the generic
+    weights); this returns its single equation (``1`` when the system is
+    regular everywhere).  ``filtration`` (default ``analyze(sys)``) only
+    supplies the generic growth vector.
 
     Raises
     ------
     ComputationLimitError
-        If a frame field is longer than :data:`SINGULAR_LOCUS_MAX_CHARS`
-        characters (the expanded determinant would be unmanageable).
+        If a frame field is too large to expand.
     NotBracketGeneratingError
-        If the frame is not square (the system is not bracket-generating at the
-        filtration's point).
+        If the system is not bracket-generating at random points.
 
     Examples
     --------
     >>> x1, x2, x3 = sp.symbols("x1 x2 x3")
     >>> martinet = ControlSystem("martinet", (x1, x2, x3), ((1, 0, x2**2 / 2), (0, 1, 0)))
     >>> singular_locus(martinet, analyze(martinet, (0, 1, 0)))
-    -x2
+    x2
     """
+    from nilpotent.core.singular import singular_set
+
     f = filtration if filtration is not None else analyze(sys)
-    if len(f.frame) != sys.n:
-        raise NotBracketGeneratingError(
-            f"the adapted frame of {sys.name!r} at the point has {len(f.frame)} fields for "
-            f"n = {sys.n}: no determinant (the system is not bracket-generating there)"
-        )
-    cols = [word_field_symengine(sys, w) for w in f.frame]
-    sizes = [sum(len(str(e)) for e in col) for col in cols]
-    if max(sizes) > SINGULAR_LOCUS_MAX_CHARS:
-        worst = max(range(len(sizes)), key=sizes.__getitem__)
-        raise ComputationLimitError(
-            f"the singular locus of {sys.name!r} is not expanded: the frame field "
-            f"{format_word(f.frame[worst])} alone has {sizes[worst]:,} characters (limit "
-            f"{SINGULAR_LOCUS_MAX_CHARS:,}), so the {sys.n}x{sys.n} determinant would be far "
-            "larger; analyze points instead (the regular/singular verdict at a point needs "
-            "no determinant)"
-        )
-    mat = se.DenseMatrix(sys.n, sys.n, [cols[k][j] for j in range(sys.n) for k in range(sys.n)])
-    return to_sympy(sys, se.expand(mat.det()))
-
-
-SINGULAR_LOCUS_MAX_CHARS = 20_000
-"""Largest frame column (characters of its components) whose determinant is expanded."""
+    return singular_set(sys, f.generic_growth_vector).equation
