@@ -43,7 +43,6 @@ from nilpotent.core.taylor import (
     ZeroTest,
     bracket,
     to_symengine,
-    weighted_jets,
 )
 from nilpotent.errors import OptionError
 
@@ -465,24 +464,51 @@ def _remainder_orders(
 def _pushforward_ok(
     approx: NilpotentApproximation, hat: Sequence[Sequence[Poly]], zero: ZeroTest
 ) -> bool:
+    r"""Pull ``fields_x`` back: $(\partial y/\partial x)(x(y))\,[\hat X]_x(x(y))$ equals $\hat X$.
+
+    All in truncated polynomial arithmetic in $y$: ``fields_x`` is read as a
+    polynomial in $d = x - p$, composed with $d(y) = B\chi(y)$; the Jacobian is
+    $(\partial y/\partial z)(\chi(y))\,A$ from the forward map $y(z)$.  Component
+    $j$ is compared up to weighted degree $w_j$ (exact coordinates) or $w_j - 1$.
+    """
     coords = approx.coordinates
     ctx = _Context.of(approx.filtration, approx.coordinates.numeric)
     w = coords.weights
     n = coords.n
     exact = coords.inverse_exact and coords.forward_exact and approx.fields_x_exact
     degrees = [wj if exact else wj - 1 for wj in w]
-    xs = ctx.xsyms
-    fwd = [to_symengine(e) for e in coords.forward]
-    jac = [[se.expand(f.diff(x)) for x in xs] for f in fwd]
-    exprs = []
-    for fx in approx.fields_x:
-        comps = [to_symengine(c) for c in fx]
+    top = max(degrees)
+    ds = [se.Symbol(f"_nilpotent_d{k}") for k in range(n)]
+    shift = {x: d + to_symengine(p) for x, d, p in zip(ctx.xsyms, ds, ctx.p, strict=True)}
+    chi = list(coords.inverse_poly)
+    d_of_y = [
+        x - Poly.constant(n, to_symengine(p)) for x, p in zip(ctx.x_of(chi), ctx.p, strict=True)
+    ]
+    jac_z = [
+        [coords.forward_poly[j].diff(l).compose(chi, w, top) for l in range(n)] for j in range(n)
+    ]
+    jac = []
+    for j in range(n):
+        row = []
+        for k in range(n):
+            acc = Poly(n)
+            for l in range(n):
+                a = ctx.Ase[l][k]
+                if a != 0 and jac_z[j][l].terms:
+                    acc = acc + jac_z[j][l].scale(a)
+            row.append(acc)
+        jac.append(row)
+    for fx, h in zip(approx.fields_x, hat, strict=True):
+        comps = [
+            Poly.from_expr(to_symengine(c).xreplace(shift), ds).compose(d_of_y, w, top)
+            for c in fx
+        ]
         for j in range(n):
-            exprs.append(se.expand(se.Add(*[jac[j][k] * comps[k] for k in range(n)])))
-    jets = weighted_jets(exprs, xs, ctx.x_of(coords.inverse_poly), w, max(degrees), ctx.numeric)
-    for i, h in enumerate(hat):
-        for j in range(n):
-            diff = (jets[i * n + j] - h[j]).truncate(w, degrees[j])
+            acc = Poly(n)
+            for k in range(n):
+                if jac[j][k].terms and comps[k].terms:
+                    acc = acc + jac[j][k].mul(comps[k], w, degrees[j])
+            diff = (acc - h[j]).truncate(w, degrees[j])
             if diff.drop_zeros(zero).terms:
                 return False
     return True

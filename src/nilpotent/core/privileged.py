@@ -554,15 +554,17 @@ def _first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
     flat = [c for f in frame for c in f]
     ys = [Poly.variable(nv, j) for j in range(n)]
     cur = point
-    for _ in range(degree):
-        jets = weighted_jets(flat, ctx.xsyms, cur, wt, degree - 1, ctx.numeric)
+    for it in range(1, degree + 1):
+        # iterate ``it`` is exact to weighted degree ``it``: jets to ``it - 1`` suffice
+        top = min(degree, it)
+        jets = weighted_jets(flat, ctx.xsyms, cur, wt, top - 1, ctx.numeric)
         new = []
         for k in range(n):
             acc = Poly(nv)
             for j in range(n):
                 comp = jets[j * n + k]
                 if comp.terms:
-                    acc = acc + ys[j].mul(comp, wt, degree)
+                    acc = acc + ys[j].mul(comp, wt, top)
             new.append(point[k] + _integrate(acc, n))
         cur = new
     out = []
@@ -596,14 +598,14 @@ def _from_exponential_map(ctx: _Context, E: Sequence[Poly]) -> Built:
     top = 2 * r
     nonlinear = [zE[j] - Poly.variable(n, j) for j in range(n)]  # χ(y) − y
     y = list(_identity(n))
-    for _ in range(top):
-        new = [
-            (Poly.variable(n, j) - nonlinear[j].compose(y, omega, top)).truncate(omega, top)
+    # Fixed point y = z - N(y), N of omega-order >= 2: iterate k is right to omega-degree
+    # k + 1 at least (each substitution gains one degree), so it is truncated there.
+    for k in range(1, top + 1):
+        deg = min(top, k + 1)
+        y = [
+            (Poly.variable(n, j) - nonlinear[j].compose(y, omega, deg)).truncate(omega, deg)
             for j in range(n)
         ]
-        if all(a.terms == b.terms for a, b in zip(new, y, strict=True)):
-            break
-        y = new
     forward = tuple(y[j].truncate(omega, r + w[j]) for j in range(n))
     return forward, tuple(zE), False, r, False, r
 

@@ -28,6 +28,7 @@ Zero tests
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Iterable, Mapping, Sequence
 
 import symengine as se
@@ -238,17 +239,27 @@ class Poly:
     def mul(
         self, other: Poly, weights: Sequence[int] | None = None, degree: int | None = None
     ) -> Poly:
-        """The product, truncated at weighted ``degree`` when given."""
+        """The product, truncated at weighted ``degree`` when given.
+
+        With a truncation, the terms of ``other`` are visited by increasing
+        weighted degree and the scan stops at the first pair beyond ``degree``.
+        """
         terms: dict[Monomial, se.Basic] = {}
-        if degree is not None:
+        if degree is None:
+            pairs_b = [(0, mb, cb) for mb, cb in other.terms.items()]
+            items_a = [(0, ma, ca) for ma, ca in self.terms.items()]
+        else:
             assert weights is not None
-            da = {m: weighted_degree(m, weights) for m in self.terms}
-            db = {m: weighted_degree(m, weights) for m in other.terms}
-        for ma, ca in self.terms.items():
-            for mb, cb in other.terms.items():
-                if degree is not None and da[ma] + db[mb] > degree:
-                    continue
-                m = tuple(a + b for a, b in zip(ma, mb, strict=True))
+            items_a = [(weighted_degree(m, weights), m, c) for m, c in self.terms.items()]
+            pairs_b = sorted(
+                ((weighted_degree(m, weights), m, c) for m, c in other.terms.items()),
+                key=lambda t: t[0],
+            )
+        for da, ma, ca in items_a:
+            for db, mb, cb in pairs_b:
+                if degree is not None and da + db > degree:
+                    break
+                m = tuple(map(operator.add, ma, mb))
                 v = ca * cb
                 terms[m] = terms[m] + v if m in terms else v
         return Poly(self.nvars, terms)
