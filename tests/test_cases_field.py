@@ -34,7 +34,7 @@ def _analysis(run_cli, *args: str) -> dict:
 
 def test_generic_rank_tiny_determinant(run_cli):
     # det(X1, X2, [X1,X2]) at x2 = 1/10 is -141*10**-14, by hand: not zero
-    x1, x2, x3 = sp.symbols("x1 x2 x3")
+    x1, x2 = sp.symbols("x1 x2")
     cols = sp.Matrix([[1, 0, x2**14], [x1, 1, 0], [1, 0, -14 * x2**13]]).T
     assert cols.det().subs(x2, sp.Rational(1, 10)) == sp.Rational(-141, 10**14)
     j = _analysis(run_cli, str(CASES / "fail-generic-rank.toml"), "--at", "x2=1/10")

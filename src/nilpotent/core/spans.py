@@ -778,9 +778,11 @@ class MeasuredSpan:
 
     def try_add(self, vec: Mapping[Key, object]) -> bool:
         v = {k: to_double(x) for k, x in vec.items()}
-        norm = sum(x * x for x in v.values()) ** 0.5
-        if norm == 0.0 or norm != norm:
+        big = max((abs(x) for x in v.values()), default=0.0)
+        if big == 0.0 or big != big or big == float("inf"):
             return False
+        v = {k: x / big for k, x in v.items()}  # no underflow in the norm
+        norm = sum(x * x for x in v.values()) ** 0.5
         u = {k: x / norm for k, x in v.items()}
         for _ in range(2):
             for b in self.basis:
@@ -808,10 +810,11 @@ def numeric_rank(rows: Sequence[Sequence[float]], rel_tol: float = 1e-9) -> int:
     kept: list[np.ndarray] = []
     for row in rows:
         v = np.asarray(row, dtype=float)
-        norm = float(np.linalg.norm(v))
-        if not np.isfinite(norm) or norm == 0.0:
+        big = float(np.max(np.abs(v))) if v.size else 0.0
+        if not np.isfinite(big) or big == 0.0:
             continue
-        u = v / norm
+        v = v / big  # no underflow in the norm
+        u = v / float(np.linalg.norm(v))
         for _ in range(2):
             for b in kept:
                 u = u - (u @ b) * b
