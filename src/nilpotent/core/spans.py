@@ -747,9 +747,12 @@ def is_zero(e: object, max_precision: int = MAX_PRECISION_BITS) -> bool | None:
     return d is Decision.DEPENDENT
 
 
-def rank(vectors: Sequence[Sequence[object]]) -> tuple[int, int]:
-    """Certified bounds ``(lo, hi)`` of the rank of exact vectors (``lo == hi`` when decided)."""
-    span = Span()
+def rank(vectors: Sequence[Sequence[object]], *, probabilistic: bool = False) -> tuple[int, int]:
+    """Certified bounds ``(lo, hi)`` of the rank of exact vectors (``lo == hi`` when decided).
+
+    ``probabilistic``: the values are taken at a pseudo-random point (see :class:`Span`).
+    """
+    span = Span(probabilistic=probabilistic)
     undetermined = 0
     for v in vectors:
         if span.add(v) is Decision.UNDETERMINED:
