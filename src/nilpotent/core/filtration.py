@@ -71,6 +71,7 @@ from nilpotent.core.spans import (
 )
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import (
+    ComputationLimitError,
     ModelError,
     PointError,
 )
@@ -530,12 +531,22 @@ def analyze(
     limit = default_max_length(n, m) if automatic else int(max_length)  # type: ignore[arg-type]
     limit = max(limit, len(generic))
     ceiling = max(limit, _budget_length(m)) if automatic else limit
+    if not automatic:
+        words = sum(_witt(m, k) for k in range(1, limit + 1))
+        if words > HALL_WORD_BUDGET_EXPLICIT:
+            raise ComputationLimitError(
+                f"max_length {limit} means up to {words:,} Hall words to examine at the point "
+                f"(m = {m}); the budget is HALL_WORD_BUDGET_EXPLICIT = "
+                f"{HALL_WORD_BUDGET_EXPLICIT:,} (nilpotent.core.filtration): lower "
+                "--max-length (or leave it out: the search is then raised automatically "
+                "within a budget)"
+            )
     at = _WordValues(sys, p, symbolic=True)
     span = Span()
     frame: list[Word] = []
     growth: list[int] = []
     unsure: dict[int, list[Word]] = {}
-    stopped_by_time = False
+    stopped_by = ""
     s = 0
     with progress(f"brackets at the point of {sys.name}", total=None) as bar:
         while True:
@@ -548,6 +559,11 @@ def analyze(
                         continue
                     try:
                         decision = span.add(at.vector(w))
+                    except ComputationLimitError as exc:
+                        if s <= len(generic):
+                            raise
+                        stopped_by = f"a size budget ({exc})"
+                        break
                     except _Undefined as exc:
                         raise PointError(
                             f"the fields of {sys.name!r} are not defined at the point "
@@ -561,12 +577,12 @@ def analyze(
                     elif decision is Decision.UNDETERMINED:
                         unsure_here.append(w)
                     if time.monotonic() - started > time_budget:
-                        stopped_by_time = True
+                        stopped_by = f"the time budget of {time_budget:g} s"
                         break
                 if span.rank < target and unsure_here:
                     unsure[s] = unsure_here
             growth.append(span.rank)
-            if span.rank == final or stopped_by_time:
+            if span.rank == final or stopped_by:
                 break
             if s >= limit:
                 if s >= ceiling or time.monotonic() - started > time_budget:
@@ -601,10 +617,8 @@ def analyze(
                 )
             )
         if span.rank < final:
-            why = (
-                f"the time budget of {time_budget:g} s"
-                if stopped_by_time
-                else ("the Hall-word budget" if automatic else "max_length")
+            why = stopped_by or (
+                "the Hall-word budget (HALL_WORD_BUDGET)" if automatic else "max_length"
             )
             reasons.append(
                 f"brackets up to length {limit} span {span.rank} of {final} dimensions at the "
@@ -651,6 +665,9 @@ def _budget_length(m: int) -> int:
 
 HALL_WORD_BUDGET = 5000
 """Most Hall words the default ``max_length`` lets :func:`analyze` examine at ``p``."""
+
+HALL_WORD_BUDGET_EXPLICIT = 100_000
+"""Most Hall words an explicit ``max_length`` may ask :func:`analyze` to examine."""
 
 
 def default_max_length(n: int, m: int) -> int:
