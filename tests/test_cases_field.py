@@ -194,3 +194,22 @@ def test_trident_body_form_is_regular_everywhere_with_a_constant_determinant():
 def test_trident_tiny_and_huge_leg_length(run_cli, value):
     j = _analysis(run_cli, "trident-snake", "--param", f"l={value}")
     assert j["growth_vector"] == [3, 6] and j["bracket_generating"] is True
+
+
+def test_hostile_expansions_and_searches_end_within_a_budget(run_cli):
+    status, out, _ = run_cli("analyze", str(CASES / "multinomial4.toml"), "--json")
+    assert status == 2 and json.loads(out)["error"]["kind"] == "computation-limit"
+    assert "EXPANSION_TERMS_BUDGET" in json.loads(out)["error"]["message"]
+    status, out, _ = run_cli("analyze", str(CASES / "stall40.toml"), "--max-length", "60",
+                             "--json")
+    assert status == 2 and "--max-length" in json.loads(out)["error"]["message"]
+    j = _analysis(run_cli, str(CASES / "stall40.toml"))
+    assert j["bracket_generating"] is None and j["undetermined"]["max_length"] >= 12
+
+
+def test_singular_locus_json_keys(run_cli):
+    j = _analysis(run_cli, str(CASES / "hopping-robot.toml"), "--singular-locus")
+    assert j["singular_locus"] == "l + 1"
+    assert j["singular_locus_equations"] == ["l + 1"]
+    assert "l + 1 = 0" in j["singular_locus_statement"]
+    assert j["singular_locus_determinants"][0]["frame"] == ["X1", "X2", "[X1,X2]"]

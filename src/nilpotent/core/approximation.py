@@ -23,7 +23,7 @@ Bracket convention $[X,Y] = DY\cdot X - DX\cdot Y$.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import symengine as se
 import sympy as sp
@@ -45,6 +45,7 @@ from nilpotent.core.taylor import (
     to_symengine,
 )
 from nilpotent.errors import OptionError
+from nilpotent.progress import progress
 
 __all__ = ["Certificate", "NilpotentApproximation", "approximate", "certify"]
 
@@ -654,7 +655,21 @@ def approximate(
     >>> a.certificate.ok
     True
     """
-    coords = privileged_coordinates(sys, point, method, numeric=numeric, max_length=max_length)
+    with progress(f"nilpotent approximation of {sys.name}", total=3) as bar:
+        bar.update(0, "privileged coordinates")
+        coords = privileged_coordinates(
+            sys, point, method, numeric=numeric, max_length=max_length
+        )
+        bar.update(1, "approximation")
+        result = _approximation(sys, coords)
+        bar.update(2, "certificate")
+        cert = certify(result)
+        bar.update(3)
+    return replace(result, certificate=cert)
+
+
+def _approximation(sys: ControlSystem, coords: PrivilegedCoordinates) -> NilpotentApproximation:
+    """The approximation in ``coords`` (its certificate not computed yet)."""
     w = coords.weights
     ctx = _Context.of(coords.filtration, coords.numeric)
     jets = coords.field_jets(extra=1)
@@ -664,17 +679,6 @@ def approximate(
     ]
     fields = tuple(tuple(c.to_sympy(coords.names) for c in h) for h in hat)
     fields_x, x_exact = _pushforward(coords, hat)
-    provisional = NilpotentApproximation(
-        system=sys,
-        point=coords.point,
-        filtration=coords.filtration,
-        coordinates=coords,
-        fields=fields,
-        fields_x=fields_x,
-        fields_x_exact=x_exact,
-        certificate=None,  # type: ignore[arg-type]
-    )
-    cert = certify(provisional)
     return NilpotentApproximation(
         system=sys,
         point=coords.point,
@@ -683,5 +687,5 @@ def approximate(
         fields=fields,
         fields_x=fields_x,
         fields_x_exact=x_exact,
-        certificate=cert,
+        certificate=None,  # type: ignore[arg-type]
     )

@@ -39,37 +39,24 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import flint
-import symengine as se
 import sympy as sp
 
 from nilpotent.core.brackets import (
     Word,
     format_word,
     hall_basis,
-    is_built,
-    se_coordinates,
-    to_symengine,
-    to_sympy,
-    word_field_symengine,
     word_length,
     word_values_at,
 )
 from nilpotent.core.spans import (
     START_PRECISION_BITS,
     Decision,
-    Evaluator,
-    Inaccurate,
-    NotEvaluable,
-    NotRational,
     Span,
-    SymbolicEvaluator,
-    Vector,
-    ball,
     exact_decimals,
     exact_value,
 )
 from nilpotent.core.system import ControlSystem
+from nilpotent.core.word_values import Undefined, WordValues
 from nilpotent.errors import (
     ComputationLimitError,
     ModelError,
@@ -179,149 +166,6 @@ class Filtration:
 # --- values of words -------------------------------------------------------------
 
 
-class _Undefined(Exception):
-    """A field cannot be evaluated (pole, complex value) at a point."""
-
-
-class _WordValues:
-    """Values of bracket words at one point, as :class:`~nilpotent.core.spans.Vector` objects.
-
-    A word whose field is built (cached on the system) is evaluated from its
-    field; a word $[u, v]$ whose field is not built is $Dv(q)u(q) - Du(q)v(q)$,
-    from directional derivatives of the fields of ``u`` and ``v`` (exact
-    rationals or arb balls, forward-mode), so the longest fields are never
-    expanded.  Exact rational values are used where the point and the fields
-    allow it; exact values in symengine's numbers (``cos(pi/2)`` is ``0``) are
-    computed the same way, only when a decision needs them (``symbolic``), and
-    abandoned when a value grows beyond a size budget.
-    """
-
-    def __init__(self, sys: ControlSystem, point: Sequence[sp.Expr], symbolic: bool) -> None:
-        self.sys = sys
-        self.point = tuple(point)
-        self.coords = se_coordinates(sys)
-        self.allow_symbolic = symbolic
-        q = [exact_value(v) for v in point]
-        self.rational_point = None if any(v is None for v in q) else q
-        self._exact: dict[Word, list | None] = {}
-        self._balls: dict[tuple[Word, int], list] = {}
-        self._sym: dict[Word, tuple | None] = {}
-        self._sym_se: dict[Word, list | None] = {}
-
-    def vector(self, word: Word) -> _WordVector:
-        return _WordVector(self, word)
-
-    # exact rationals ------------------------------------------------------------
-    def exact(self, word: Word) -> list | None:
-        if word in self._exact:
-            return self._exact[word]
-        out = None
-        if self.rational_point is not None:
-            env = dict(zip(self.coords, self.rational_point, strict=True))
-            try:
-                out = self._eval(word, env, exact=True, sub=self.exact)
-            except NotRational:
-                out = None
-        self._exact[word] = out
-        return out
-
-    def balls(self, word: Word, prec: int) -> list:
-        key = (word, prec)
-        hit = self._balls.get(key)
-        if hit is not None:
-            return hit
-        old = flint.ctx.prec
-        flint.ctx.prec = prec
-        try:
-            env = {x: ball(v, prec) for x, v in zip(self.coords, self.point, strict=True)}
-            try:
-                out = self._eval(word, env, exact=False, sub=lambda w: self.balls(w, prec))
-            except Inaccurate:
-                out = [flint.arb("nan")] * self.sys.n
-        finally:
-            flint.ctx.prec = old
-        self._balls[key] = out
-        return out
-
-    def _eval(self, word: Word, env: dict, exact: bool, sub) -> list:
-        try:
-            if is_built(self.sys, word):
-                ev = Evaluator(env, exact)
-                return [ev.value(e) for e in word_field_symengine(self.sys, word)]
-            u, v = word
-            uval, vval = sub(u), sub(v)
-            if uval is None or vval is None:
-                raise NotRational
-            fu, fv = word_field_symengine(self.sys, u), word_field_symengine(self.sys, v)
-            along_u = Evaluator(env, exact, dict(zip(self.coords, uval, strict=True)))
-            along_v = Evaluator(env, exact, dict(zip(self.coords, vval, strict=True)))
-            return [along_u.dual(b)[1] - along_v.dual(a)[1] for a, b in zip(fu, fv, strict=True)]
-        except NotEvaluable as exc:
-            raise _Undefined(str(exc)) from exc
-        except ZeroDivisionError as exc:
-            raise _Undefined("division by zero") from exc
-
-    def symbolic(self, word: Word) -> tuple | None:
-        """Exact values (sympy) from symengine's exact numbers, or None beyond the budget."""
-        if not self.allow_symbolic:
-            return None
-        if word not in self._sym:
-            try:
-                vals = self._symbolic(word)
-                out = tuple(to_sympy(self.sys, v) for v in vals) if vals is not None else None
-            except NotRational:
-                out = None
-            self._sym[word] = out
-        return self._sym[word]
-
-    def _symbolic(self, word: Word) -> list | None:
-        if word in self._sym_se:
-            return self._sym_se[word]
-        env = {x: to_symengine(v) for x, v in zip(self.coords, self.point, strict=True)}
-        try:
-            if is_built(self.sys, word):
-                ev = SymbolicEvaluator(env)
-                out = [ev.value(e) for e in word_field_symengine(self.sys, word)]
-            else:
-                u, v = word
-                uval, vval = self._symbolic(u), self._symbolic(v)
-                if uval is None or vval is None:
-                    return None
-                fu, fv = word_field_symengine(self.sys, u), word_field_symengine(self.sys, v)
-                along_u = SymbolicEvaluator(env, dict(zip(self.coords, uval, strict=True)))
-                along_v = SymbolicEvaluator(env, dict(zip(self.coords, vval, strict=True)))
-                out = [
-                    se.expand(along_u.dual(b)[1] - along_v.dual(a)[1])
-                    for a, b in zip(fu, fv, strict=True)
-                ]
-        except NotRational:
-            out = None
-        except NotEvaluable as exc:
-            raise _Undefined(str(exc)) from exc
-        self._sym_se[word] = out
-        return out
-
-
-class _WordVector(Vector):
-    def __init__(self, at: _WordValues, word: Word) -> None:
-        self.at, self.word = at, word
-
-    def rational(self):
-        vals = self.at.exact(self.word)
-        if vals is None:
-            return None
-        return {k: v for k, v in enumerate(vals) if v != 0}
-
-    def balls(self, prec: int):
-        return {k: v for k, v in enumerate(self.at.balls(self.word, prec)) if not v.is_zero()}
-
-    def symbolic(self):
-        vals = self.at.symbolic(self.word)
-        if vals is None:
-            return None
-        return {k: v for k, v in enumerate(vals) if v != 0}
-
-
 ANALYSIS_TIME_BUDGET = 60.0
 """Seconds the bracket search at a point may take before its result is undetermined."""
 
@@ -362,7 +206,7 @@ def _generic_growth_at(
     generators with the words chosen at the previous length.
     """
     n, m = sys.n, sys.m
-    at = _WordValues(sys, values, symbolic=False)
+    at = WordValues(sys, values, symbolic=False)
     span = Span(probabilistic=True)
     chosen: list[Word] = []
 
@@ -428,7 +272,7 @@ def generic_growth_vector(
             growth, words = _generic_growth_at(sys, values, frame)
             if frame is not None and growth != results[0]:
                 growth, words = _generic_growth_at(sys, values)
-        except _Undefined:
+        except Undefined:
             continue
         results.append(growth)
         frame = words
@@ -541,7 +385,7 @@ def analyze(
                 "--max-length (or leave it out: the search is then raised automatically "
                 "within a budget)"
             )
-    at = _WordValues(sys, p, symbolic=True)
+    at = WordValues(sys, p, symbolic=True)
     span = Span()
     frame: list[Word] = []
     growth: list[int] = []
@@ -564,7 +408,7 @@ def analyze(
                             raise
                         stopped_by = f"a size budget ({exc})"
                         break
-                    except _Undefined as exc:
+                    except Undefined as exc:
                         raise PointError(
                             f"the fields of {sys.name!r} are not defined at the point "
                             f"({', '.join(str(v) for v in p)}): {exc}"
