@@ -40,6 +40,11 @@ def print_analysis(system, filtration) -> None:
     reached = filtration.growth_vector[-1] if filtration.growth_vector else 0
     if filtration.bracket_generating:
         verdict = "yes"
+    elif filtration.bracket_generating is False and filtration.invariant_hypersurface is not None:
+        verdict = (
+            f"NO at the point: the hypersurface {filtration.invariant_hypersurface} = 0 through "
+            "it is invariant under every field (the brackets span everything nearby, never on it)"
+        )
     elif filtration.bracket_generating is False:
         verdict = (
             f"NO: the brackets span only {reached} of {system.n} dimensions (also at every "

@@ -112,6 +112,11 @@ class Filtration:
         ``precision_bits`` (highest ball precision), ``undetermined_words``
         (per length, the words whose independence was not decided),
         ``reason`` (a sentence) and ``raise_with`` (the option that searches further).
+    invariant_hypersurface:
+        Where the brackets span $\\mathbb{R}^n$ nearby but not at ``p``: a
+        polynomial $g$ with $g(p) = 0$, $\\nabla g(p) \\ne 0$ whose zero set is
+        invariant under every field, proving ``bracket_generating`` false
+        (:func:`nilpotent.core.singular.invariant_hypersurface`); else None.
     """
 
     system: ControlSystem
@@ -127,6 +132,7 @@ class Filtration:
     exact: bool
     max_length: int = 0
     undetermined: Mapping[str, object] | None = None
+    invariant_hypersurface: sp.Expr | None = None
 
     @property
     def frame_names(self) -> tuple[str, ...]:
@@ -160,6 +166,11 @@ class Filtration:
             "frame": list(self.frame_names),
             "frame_values": [[format_expression(v) for v in col] for col in self.frame_values],
             "undetermined": dict(self.undetermined) if self.undetermined is not None else None,
+            "invariant_hypersurface": (
+                format_expression(self.invariant_hypersurface)
+                if self.invariant_hypersurface is not None
+                else None
+            ),
         }
 
 
@@ -450,7 +461,14 @@ def analyze(
     else:
         bracket_generating = None
     certain = not unsure and span.rank == final
-    if bracket_generating is None or not certain:
+    invariant = None
+    if bracket_generating is None and not unsure:
+        from nilpotent.core.singular import invariant_hypersurface
+
+        invariant = invariant_hypersurface(sys, p, generic)
+        if invariant is not None:
+            bracket_generating = False
+    if (bracket_generating is None or not certain) and invariant is None:
         reasons = []
         if unsure:
             reasons.append(
@@ -478,6 +496,8 @@ def analyze(
             "raise_with": "max_length (CLI --max-length)",
         }
     regular: bool | None = growth_t == generic if certain else None
+    if invariant is not None:
+        regular = False  # the brackets span R^n nearby, never at p
     frame_values = word_values_at(sys, frame, p) if frame else ()
     return Filtration(
         system=sys,
@@ -493,6 +513,7 @@ def analyze(
         exact=span.exact,
         max_length=limit,
         undetermined=undetermined,
+        invariant_hypersurface=invariant,
     )
 
 

@@ -41,7 +41,13 @@ from nilpotent.core.brackets import (
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, NotBracketGeneratingError
 
-__all__ = ["MAX_FRAMES", "SINGULAR_LOCUS_MAX_CHARS", "SingularLocus", "singular_set"]
+__all__ = [
+    "MAX_FRAMES",
+    "SINGULAR_LOCUS_MAX_CHARS",
+    "SingularLocus",
+    "invariant_hypersurface",
+    "singular_set",
+]
 
 SINGULAR_LOCUS_MAX_CHARS = 20_000
 """Largest frame column (characters of its components) whose determinant is expanded."""
@@ -267,3 +273,42 @@ def singular_set(sys: ControlSystem, generic: Sequence[int] | None = None) -> Si
         if eq is not None and all(sp.simplify(eq - e) != 0 for e in equations):
             equations.append(eq)
     return SingularLocus(tuple(dets), tuple(equations), complete)
+
+
+def invariant_hypersurface(
+    sys: ControlSystem, point: Sequence[sp.Expr], generic: Sequence[int]
+) -> sp.Expr | None:
+    r"""A polynomial $g$ proving that ``sys`` is not bracket-generating at ``point``, or None.
+
+    $g$ is one of the equations of the singular locus with $g(p) = 0$,
+    $\nabla g(p) \ne 0$ and $X_i g \in (g)$ for every field (the numerator of
+    $X_i g$ is divisible by $g$): then the hypersurface $\{g = 0\}$ is invariant
+    under every field, hence every bracket is tangent to it and the brackets
+    never span $\mathbb{R}^n$ at $p$.  Only tried for fields that are rational
+    functions of the coordinates; None when no such $g$ is found (nothing is
+    then concluded).
+    """
+    coords = sys.coordinates
+    fields = sys.specialized_fields
+    if not all(sp.S(e).is_rational_function(*coords) for f in fields for e in f):
+        return None
+    try:
+        locus = singular_set(sys, generic)
+    except (ComputationLimitError, NotBracketGeneratingError):
+        return None
+    at = dict(zip(coords, point, strict=True))
+    for g in locus.equations:
+        if not g.is_polynomial(*coords) or sp.simplify(g.subs(at)) != 0:
+            continue
+        grad = [sp.diff(g, x) for x in coords]
+        if all(sp.simplify(d.subs(at)) == 0 for d in grad):
+            continue
+        invariant = True
+        for f in fields:
+            num, _ = sp.fraction(sp.cancel(sp.Add(*[c * d for c, d in zip(f, grad, strict=True)])))
+            if num != 0 and sp.div(sp.expand(num), g, *coords)[1] != 0:
+                invariant = False
+                break
+        if invariant:
+            return g
+    return None

@@ -21,9 +21,10 @@ Weighted Taylor jets (:func:`weighted_jets`)
 Zero tests
     Coefficients are expanded and compared with 0 structurally.  Where a
     coefficient mixes transcendental numbers (``cos(1/5)**2 + sin(1/5)**2 - 1``)
-    the structural test can miss a zero; :class:`ZeroTest` then decides from a
-    50-digit evaluation and counts such numeric decisions so that results can
-    say they were not decided exactly.
+    the structural test can miss a zero; :class:`ZeroTest` then asks the rank
+    engine (:func:`nilpotent.core.spans.is_zero`: exact or certified) and counts
+    the zeros it could not prove, so that results can say they were not decided
+    exactly.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from collections.abc import Iterable, Mapping, Sequence
 import symengine as se
 import sympy as sp
 
-from nilpotent.core.spans import to_double
+from nilpotent.core.spans import is_zero, to_double
 from nilpotent.errors import PointError
 
 Monomial = tuple[int, ...]
@@ -71,8 +72,12 @@ class ZeroTest:
     """Decide whether an exact coefficient is zero.
 
     Structural first (symengine's canonical form after expansion); where that
-    leaves a non-number, the value at :attr:`digits` digits decides; a float
-    is zero below :attr:`float_tolerance` in absolute value.
+    leaves a constant that is not a number, :func:`nilpotent.core.spans.is_zero`
+    decides (exact for rational and algebraic values, a certified ball proves a
+    nonzero); a constant that stays within a ball around 0 at
+    :data:`~nilpotent.core.spans.MAX_PRECISION_BITS` bits without an exact proof
+    counts as 0 and as a numerical decision.  A float (a value computed in
+    floating point) is zero below :attr:`float_tolerance` in absolute value.
     :attr:`numeric_decisions` counts the coefficients decided zero numerically.
     """
 
@@ -92,13 +97,14 @@ class ZeroTest:
             return False
         if c.is_Number:
             return False
-        value = sp.N(c._sympy_(), self.digits)
-        if not value.is_number:
+        if c.free_symbols:
             return False
-        if abs(complex(value)) < 10 ** (-(self.digits - 10)):
+        # the one rank engine: exact (rational, algebraic) or a certified nonzero ball
+        verdict = is_zero(c)
+        if verdict is None:  # 0 to 1024 bits but not provably: a numerical decision
             self.numeric_decisions += 1
             return True
-        return False
+        return verdict
 
 
 class Poly:
