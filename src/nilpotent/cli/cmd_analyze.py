@@ -7,16 +7,21 @@ from typing import Annotated, Any
 import typer
 
 from nilpotent.cli.app import (
+    MAX_BRACKET_LENGTH,
     AtOpt,
     JsonOpt,
     ModelArg,
     ParamOpt,
     app,
+    bounded_int,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_point_option,
+    print_heading,
     stdout_console,
+    work,
 )
 
 
@@ -36,7 +41,7 @@ def print_analysis(system, filtration) -> None:
         f"{n}={format_expression(v)}"
         for n, v in zip(system.coordinate_names, filtration.point, strict=True)
     )
-    console.print(f"[bold]{system.name}[/bold] at ({pt})")
+    print_heading(console, system.name, f" at ({literal(pt, 2000)})")
     reached = filtration.growth_vector[-1] if filtration.growth_vector else 0
     if filtration.bracket_generating:
         verdict = "yes"
@@ -99,7 +104,7 @@ def analyze_command(
         int | None,
         typer.Option(
             "--max-length",
-            min=1,
+            parser=bounded_int("--max-length", 1, MAX_BRACKET_LENGTH),
             help="Longest bracket length examined at the point (default: automatic, from "
             "max(2n+2, 12) raised while the Hall words fit a budget); matters only at "
             "singular points.",
@@ -123,8 +128,13 @@ def analyze_command(
 
     system = load_model_option(model, param)
     point = parse_point_option(at, system)
-    filtration = analyze(system, point, max_length=max_length)
-    locus = singular_set(system, filtration.generic_growth_vector) if singular_locus else None
+    with work(f"analyze {system.name}"):
+        filtration = analyze(system, point, max_length=max_length)
+    if singular_locus:
+        with work(f"singular locus of {system.name}"):
+            locus = singular_set(system, filtration.generic_growth_vector)
+    else:
+        locus = None
     if json_out:
         payload = analysis_payload(system, filtration)
         if locus is not None:

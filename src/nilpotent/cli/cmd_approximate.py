@@ -7,16 +7,20 @@ from typing import Annotated, Any
 import typer
 
 from nilpotent.cli.app import (
+    MAX_BRACKET_LENGTH,
     AtOpt,
     JsonOpt,
     ModelArg,
     ParamOpt,
     app,
+    bounded_int,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_point_option,
     stdout_console,
+    work,
 )
 from nilpotent.errors import OptionError
 
@@ -44,7 +48,7 @@ def approximate_command(
         int | None,
         typer.Option(
             "--max-length",
-            min=1,
+            parser=bounded_int("--max-length", 1, MAX_BRACKET_LENGTH),
             help="Longest bracket length examined at the point (default: automatic, raised "
             "within a budget of Hall words while the brackets do not span); matters only "
             "at singular points.",
@@ -61,14 +65,19 @@ def approximate_command(
         raise OptionError("--json and --latex are exclusive: choose one output format")
     if method != "auto" and method not in METHODS:
         raise OptionError(
-            f"--method {method!r} is unknown; choose one of: auto, {', '.join(METHODS)}"
+            f"--method {literal(method, 60)!r} is unknown; "
+            f"choose one of: auto, {', '.join(METHODS)}"
         )
     system = load_model_option(model, param)
     point = parse_point_option(at, system)
-    approx = approximate(system, point, method=method, max_length=max_length)
+    with work(f"approximate {system.name}"):
+        approx = approximate(system, point, method=method, max_length=max_length)
     if json_out:
         emit_json(approximation_payload(system, approx))
     elif latex:
         print(approx.to_latex())
     else:
-        stdout_console().print(str(approx), markup=False, highlight=False)
+        text = str(approx)
+        if system.name != literal(system.name):
+            text = text.replace(system.name, literal(system.name))
+        stdout_console().print(text, markup=False, highlight=False)

@@ -383,19 +383,11 @@ def analyze(
     generic = generic_growth_vector(sys, p)
     final = generic[-1]
     automatic = max_length is None
+    if max_length is not None:
+        check_hall_budget(m, max_length)
     limit = default_max_length(n, m) if automatic else int(max_length)  # type: ignore[arg-type]
     limit = max(limit, len(generic))
     ceiling = max(limit, _budget_length(m)) if automatic else limit
-    if not automatic:
-        words = sum(_witt(m, k) for k in range(1, limit + 1))
-        if words > HALL_WORD_BUDGET_EXPLICIT:
-            raise ComputationLimitError(
-                f"max_length {limit} means up to {words:,} Hall words to examine at the point "
-                f"(m = {m}); the budget is HALL_WORD_BUDGET_EXPLICIT = "
-                f"{HALL_WORD_BUDGET_EXPLICIT:,} (nilpotent.core.filtration): lower "
-                "--max-length (or leave it out: the search is then raised automatically "
-                "within a budget)"
-            )
     at = WordValues(sys, p, symbolic=True)
     span = Span()
     frame: list[Word] = []
@@ -531,10 +523,6 @@ def _budget_length(m: int) -> int:
 HALL_WORD_BUDGET = 5000
 """Most Hall words the default ``max_length`` lets :func:`analyze` examine at ``p``."""
 
-HALL_WORD_BUDGET_EXPLICIT = 100_000
-"""Most Hall words an explicit ``max_length`` may ask :func:`analyze` to examine."""
-
-
 def default_max_length(n: int, m: int) -> int:
     r"""The default longest bracket length examined at a point.
 
@@ -552,6 +540,37 @@ def default_max_length(n: int, m: int) -> int:
         total += count
         length += 1
     return length
+
+
+def check_hall_budget(m: int, max_length: int) -> None:
+    """Refuse an explicit ``max_length`` whose Hall words exceed :data:`HALL_WORD_BUDGET`.
+
+    Raises
+    ------
+    ComputationLimitError
+        Naming the number of Hall words, the budget and the option (``--max-length``).
+    """
+    total = 0
+    for length in range(1, max_length + 1):
+        total += _witt(m, length)
+        if total > HALL_WORD_BUDGET:
+            raise ComputationLimitError(
+                f"--max-length {max_length} with {m} fields means more than "
+                f"{HALL_WORD_BUDGET:,} Hall words (the budget HALL_WORD_BUDGET; already "
+                f"{total:,} up to length {length}); give a --max-length of at most "
+                f"{default_max_length_for_budget(m)}"
+            )
+
+
+def default_max_length_for_budget(m: int) -> int:
+    """The longest bracket length whose Hall words fit in :data:`HALL_WORD_BUDGET`."""
+    total = length = 0
+    while True:
+        count = _witt(m, length + 1)
+        if total + count > HALL_WORD_BUDGET:
+            return max(length, 1)
+        total += count
+        length += 1
 
 
 def _witt(m: int, k: int) -> int:
