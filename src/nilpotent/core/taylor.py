@@ -331,6 +331,16 @@ class Poly:
         With ``keep_factors`` the products are not evaluated, so a float coefficient is
         not distributed over a factor such as ``(x - 1/3)`` (which would round ``1/3``).
         """
+        if not keep_factors:
+            # built by symengine (fast on thousands of terms), converted once
+            ses = [se.S(x) for x in symbols]
+            total = se.Add(
+                *[
+                    se.Mul(c, *[x**a for x, a in zip(ses, m, strict=True) if a])
+                    for m, c in sorted(self.terms.items())
+                ]
+            )
+            return sp.S(total)
         out = []
         for m, c in sorted(self.terms.items()):
             f: list[sp.Expr] = [c._sympy_()]
