@@ -136,7 +136,12 @@ def test_offhooked_trailer():
     sys = _case("offhooked-trailer", a=1, d=1)
     assert analyze(sys, parse_point("theta0=1", sys)).growth_vector == (2, 3, 4)
     on = analyze(sys, parse_point("theta0=pi", sys))
-    assert on.bracket_generating is not True  # an invariant hypersurface
+    # the hypersurface theta0 - theta1 = pi is invariant: proved, so "not bracket-generating"
+    assert on.bracket_generating is False and on.regular is False
+    assert on.invariant_hypersurface is not None
+    # a transcendental point off it (sin(pi) is enclosed in a ball around 0 there)
+    off = analyze(sys, parse_point("theta0=pi,theta1=1/3", sys))
+    assert off.bracket_generating is True and off.growth_vector == (2, 3, 4)
     (eq1, eq2) = singular_set(sys).equations
     th0, th1 = sp.symbols("theta0 theta1")
     for eq in (eq1, eq2):

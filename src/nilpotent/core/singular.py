@@ -278,37 +278,59 @@ def singular_set(sys: ControlSystem, generic: Sequence[int] | None = None) -> Si
 def invariant_hypersurface(
     sys: ControlSystem, point: Sequence[sp.Expr], generic: Sequence[int]
 ) -> sp.Expr | None:
-    r"""A polynomial $g$ proving that ``sys`` is not bracket-generating at ``point``, or None.
+    r"""An equation $g$ proving that ``sys`` is not bracket-generating at ``point``, or None.
 
-    $g$ is one of the equations of the singular locus with $g(p) = 0$,
-    $\nabla g(p) \ne 0$ and $X_i g \in (g)$ for every field (the numerator of
-    $X_i g$ is divisible by $g$): then the hypersurface $\{g = 0\}$ is invariant
-    under every field, hence every bracket is tangent to it and the brackets
-    never span $\mathbb{R}^n$ at $p$.  Only tried for fields that are rational
-    functions of the coordinates; None when no such $g$ is found (nothing is
-    then concluded).
+    $g$ is one of the equations of the singular locus with $g(p) = 0$ and
+    $\nabla g(p) \ne 0$ whose zero set near $p$ is invariant under every field:
+    then every bracket is tangent to it and the brackets never span
+    $\mathbb{R}^n$ at $p$.  Invariance is proved exactly: for polynomial $g$ and
+    rational fields, $g$ divides the numerator of every $X_i g$; otherwise $g = 0$
+    is solved for a coordinate $x_k$ with $\partial_k g(p) \ne 0$ (the branch
+    through $p$) and every $X_i g$ must simplify to 0 on it.  None when no such
+    $g$ is found (nothing is then concluded).
     """
     coords = sys.coordinates
     fields = sys.specialized_fields
-    if not all(sp.S(e).is_rational_function(*coords) for f in fields for e in f):
-        return None
+    rational = all(sp.S(e).is_rational_function(*coords) for f in fields for e in f)
     try:
         locus = singular_set(sys, generic)
     except (ComputationLimitError, NotBracketGeneratingError):
         return None
     at = dict(zip(coords, point, strict=True))
     for g in locus.equations:
-        if not g.is_polynomial(*coords) or sp.simplify(g.subs(at)) != 0:
+        if len(str(g)) > 2_000 or sp.simplify(g.subs(at)) != 0:
             continue
         grad = [sp.diff(g, x) for x in coords]
-        if all(sp.simplify(d.subs(at)) == 0 for d in grad):
+        moving = [k for k, d in enumerate(grad) if sp.simplify(d.subs(at)) != 0]
+        if not moving:
             continue
-        invariant = True
-        for f in fields:
-            num, _ = sp.fraction(sp.cancel(sp.Add(*[c * d for c, d in zip(f, grad, strict=True)])))
-            if num != 0 and sp.div(sp.expand(num), g, *coords)[1] != 0:
-                invariant = False
-                break
-        if invariant:
+        derivs = [sp.Add(*[c * d for c, d in zip(f, grad, strict=True)]) for f in fields]
+        if rational and g.is_polynomial(*coords):
+            ok = all(
+                sp.div(sp.expand(sp.fraction(sp.cancel(d))[0]), g, *coords)[1] == 0
+                for d in derivs
+            )
+        else:
+            ok = _vanishes_on_branch(g, derivs, coords[moving[0]], at, coords)
+        if ok:
             return g
     return None
+
+
+def _vanishes_on_branch(
+    g: sp.Expr, derivs: Sequence[sp.Expr], x: sp.Symbol, at: dict, coords: Sequence[sp.Symbol]
+) -> bool:
+    """Whether every ``derivs`` vanishes on the branch of ``g = 0`` through ``at`` (as x = s)."""
+    try:
+        solutions = sp.solve(g, x)
+    except (NotImplementedError, ValueError):
+        return False
+    for sol in solutions:
+        if sp.simplify(sol.subs(at) - at[x]) != 0:
+            continue
+        for d in derivs:
+            value = d.subs(x, sol)
+            if sp.simplify(value) != 0 and trig_normal_form(value, coords) != 0:
+                return False
+        return True
+    return False

@@ -297,20 +297,30 @@ def _exact_decision(rows: Sequence[Mapping[Key, fmpq]]) -> Decision:
 def _gram_det(rows: Sequence[Mapping[Key, arb]]) -> arb | None:
     """Determinant of the Gram matrix of the equilibrated rows (None if a norm is not positive).
 
-    Each column (coordinate) is first divided by the largest magnitude in it
-    and then each row by its norm: neither scaling changes the rank (the
-    enclosures contain the matrix scaled by the midpoints of the factors), and
-    together they make the decision independent of the units of the
-    coordinates and of the size of the fields.
+    Each column (coordinate) with a certified nonzero entry is first divided by
+    the largest magnitude in it, and then each row by its norm: neither scaling
+    changes the rank (the enclosures contain the matrix scaled by the midpoints
+    of the factors), and together they make the decision independent of the
+    units of the coordinates and of the size of the fields.  The columns of
+    certified nonzero entries are tried alone first (a nonzero minor there is a
+    nonzero minor of the whole matrix); then all columns, those whose entries
+    all enclose 0 left unscaled.
     """
-    scale: dict[Key, arb] = {}
+    certain: dict[Key, arb] = {}
     for r in rows:
         for k, x in r.items():
-            up = x.abs_upper()
-            if k not in scale or up > scale[k]:
-                scale[k] = up
-    inv = {k: 1 / arb(v) for k, v in scale.items() if arb(v) > 0}
-    rows = [{k: x * inv[k] for k, x in r.items() if k in inv} for r in rows]
+            if not x.contains(0):
+                up = x.abs_upper()
+                if k not in certain or up > certain[k]:
+                    certain[k] = up
+    inv = {k: 1 / arb(v) for k, v in certain.items()}
+    first = _unit_gram([{k: x * inv[k] for k, x in r.items() if k in inv} for r in rows])
+    if first is not None and first > 0:
+        return first
+    return _unit_gram([{k: x * inv.get(k, 1) for k, x in r.items()} for r in rows])
+
+
+def _unit_gram(rows: Sequence[Mapping[Key, arb]]) -> arb | None:
     units = []
     for r in rows:
         norm2 = sum((x * x for x in r.values()), arb(0))
