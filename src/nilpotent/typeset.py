@@ -306,10 +306,13 @@ def system_display(system: Any) -> Display:
 def filtration_display(filtration: Any) -> Display:
     """A :class:`~nilpotent.core.filtration.Filtration`: growth, weights, the adapted frame."""
     coords = filtration.system.coordinates
-    kind = "regular" if filtration.regular else "singular"
-    generating = "bracket-generating" if filtration.bracket_generating else (
-        f"not bracket-generating up to length {filtration.max_length}"
+    kind = {True: "regular point", False: "singular point"}.get(
+        filtration.regular, "regularity undetermined"
     )
+    generating = {
+        True: "bracket-generating",
+        False: f"not bracket-generating up to length {filtration.max_length}",
+    }.get(filtration.bracket_generating, "bracket generation undetermined")
     rows = tuple(
         (str(j), str(w), Math(word_latex(word)), Math(field_latex(value, coords)))
         for j, (w, word, value) in enumerate(
@@ -327,7 +330,7 @@ def filtration_display(filtration: Any) -> Display:
                     ("r", str(filtration.step)),
                 )
             ),
-            Text(f"{kind} point, {generating}; generic growth vector "
+            Text(f"{kind}, {generating}; generic growth vector "
                  f"{tuple(filtration.generic_growth_vector)}"),
             Table(("j", "weight w_j", "word Y_j", "Y_j(p)"), rows),
         ),

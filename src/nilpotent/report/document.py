@@ -50,6 +50,9 @@ def _tuple(values: Any) -> str:
     return formula(r"\left(" + ", ".join(expr_latex(v) for v in values) + r"\right)")
 
 
+_REGULARITY = {True: "regular point", False: "singular point"}
+
+
 def _analysis_block(label: str, system, filt) -> str:
 
     rows = [
@@ -64,7 +67,7 @@ def _analysis_block(label: str, system, filt) -> str:
     return (
         f"<h3>{label}</h3><p>growth vector {_tuple(filt.growth_vector)}, weights "
         f"{_tuple(filt.weights)}, step {filt.step}, "
-        f"{'regular' if filt.regular else 'singular'} point; adapted frame at 0:</p>"
+        f"{_REGULARITY.get(filt.regular, 'regularity undetermined')}; adapted frame at 0:</p>"
         + table(
             ("j", "weight", "word", "value at 0"),
             rows,
