@@ -78,3 +78,9 @@ class ComputationLimitError(NilpotentError):
     """A symbolic result would be too large to compute or print in reasonable time."""
 
     kind = "computation-limit"
+
+
+class WorldError(NilpotentError):
+    """A world file (workspace bounds and obstacles) is missing or malformed."""
+
+    kind = "world"
