@@ -31,6 +31,7 @@ segment) and refused unless admissible and within ``tol`` of the goal.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections import deque
@@ -48,7 +49,7 @@ from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
 
-__all__ = ["GlobalPlan", "Piece", "json_safe", "plan_global", "ompl_path"]
+__all__ = ["GlobalPlan", "Piece", "json_safe", "ompl_path", "plan_global"]
 
 #: Tolerance at intermediate waypoints (the next piece starts from the state reached).
 MID_TOL = 1e-3
@@ -283,7 +284,7 @@ def ompl_path(
 
 def _densify(points: Sequence[np.ndarray], max_piece: float) -> list[np.ndarray]:
     out = [points[0]]
-    for a, b in zip(points[:-1], points[1:], strict=True):
+    for a, b in itertools.pairwise(points):
         k = max(1, math.ceil(float(np.linalg.norm(b - a)) / max_piece))
         out += [a + (b - a) * (i / k) for i in range(1, k + 1)]
     return out
@@ -297,12 +298,11 @@ def _chord_valid(checker: Checker, a: np.ndarray, b: np.ndarray, step: float = 0
 
 def _steer(
     system: ControlSystem, checker: Checker, x: np.ndarray, w: np.ndarray, tol: float,
-    engine: str,
+    options: dict[str, Any],
 ) -> Plan | None:
     """The nilpotent plan from ``x`` to ``w`` if its densely sampled motion is admissible."""
     try:
-        p = plan(system, x, w, tol, trajectory_points=CHECK_POINTS, engine=engine,
-                 max_iterations=20)
+        p = plan(system, x, w, tol, trajectory_points=CHECK_POINTS, **options)
     except (PlanningError, SingularPointError, IntegrationError):
         return None
     if not np.all(checker.valid(p.trajectory.states)):
@@ -324,6 +324,8 @@ def plan_global(
     max_piece: float = MAX_PIECE,
     engine: str = "auto",
     direct: bool = True,
+    anchor: str = "auto",
+    max_iterations: int = 30,
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -351,6 +353,8 @@ def plan_global(
         Integration engine (:data:`nilpotent.planning.simulation.ENGINES`).
     direct:
         Try the single nilpotent plan first (see the module doc).
+    anchor, max_iterations:
+        Passed to :func:`~nilpotent.planning.iterative.plan` for every piece.
 
     Raises
     ------
@@ -367,6 +371,8 @@ def plan_global(
         raise PlanningError(f"time limit must be a positive number of seconds, got {time_limit}")
     if not (max_piece > 0 and math.isfinite(max_piece)):
         raise PlanningError(f"max_piece must be > 0, got {max_piece}")
+    options: dict[str, Any] = {"engine": engine, "anchor": anchor,
+                               "max_iterations": max_iterations}
     checker = Checker(system, world, limits, singular_margin)
     assert checker.limits is not None
     x0 = np.array([float(v) for v in start])  # type: ignore[arg-type]
@@ -402,7 +408,7 @@ def plan_global(
 
     # 1. direct attempt (old behaviour)
     if direct and _chord_valid(checker, x0, xg):
-        p = _steer(system, checker, x0, xg, tol, engine)
+        p = _steer(system, checker, x0, xg, tol, options)
         if p is not None and p.converged:
             piece = Piece(tuple(xg), 0, len(p.segments), p.error, len(p.iterations), 0)
             try:
@@ -436,7 +442,7 @@ def plan_global(
             )
         w, halvings = targets[0]
         final = len(targets) == 1
-        p = _steer(system, checker, x, w, tol if final else max(tol, MID_TOL), engine)
+        p = _steer(system, checker, x, w, tol if final else max(tol, MID_TOL), options)
         if p is None or not (p.converged or not final):
             if float(np.linalg.norm(w - prev)) < MIN_PIECE:
                 raise PlanningError(
