@@ -299,11 +299,21 @@ def _chord_valid(checker: Checker, a: np.ndarray, b: np.ndarray, step: float = 0
 def _steer(
     system: ControlSystem, checker: Checker, x: np.ndarray, w: np.ndarray, tol: float,
     options: dict[str, Any],
+    endpoints_singular_raise: bool = False,
 ) -> Plan | None:
-    """The nilpotent plan from ``x`` to ``w`` if its densely sampled motion is admissible."""
+    """The nilpotent plan from ``x`` to ``w`` if its densely sampled motion is admissible.
+
+    ``endpoints_singular_raise``: a singular ``x`` or ``w`` raises
+    :class:`SingularPointError` (for the user's start and goal) instead of
+    failing the piece.
+    """
     try:
         p = plan(system, x, w, tol, trajectory_points=CHECK_POINTS, **options)
-    except (PlanningError, SingularPointError, IntegrationError):
+    except SingularPointError as exc:
+        if endpoints_singular_raise and not str(exc).startswith("the path meets"):
+            raise
+        return None
+    except (PlanningError, IntegrationError):
         return None
     if not np.all(checker.valid(p.trajectory.states)):
         return None
@@ -408,7 +418,7 @@ def plan_global(
 
     # 1. direct attempt (old behaviour)
     if direct and _chord_valid(checker, x0, xg):
-        p = _steer(system, checker, x0, xg, tol, options)
+        p = _steer(system, checker, x0, xg, tol, options, endpoints_singular_raise=True)
         if p is not None and p.converged:
             piece = Piece(tuple(xg), 0, len(p.segments), p.error, len(p.iterations), 0)
             try:

@@ -189,11 +189,10 @@ def animate_plan_world(
         ax.set_title(f"{p.system.name}: t = {p.trajectory.times[idx[k]]:.3g}", fontsize=9)
         return [*drawn, marker]
 
-    anim = FuncAnimation(fig, update, frames=len(idx), blit=False)
-    if kind == ".gif":
-        anim.save(str(path), writer=PillowWriter(fps=fps), dpi=dpi)
-    elif kind == ".mp4":
-        anim.save(str(path), writer=FFMpegWriter(fps=fps), dpi=dpi)
+    if kind in (".gif", ".mp4"):
+        anim = FuncAnimation(fig, update, frames=len(idx), blit=False)
+        writer = PillowWriter(fps=fps) if kind == ".gif" else FFMpegWriter(fps=fps)
+        anim.save(str(path), writer=writer, dpi=dpi)
     else:
         images = []
         for k in range(len(idx)):
