@@ -355,3 +355,31 @@ def test_plan_figures(tmp_path):
     assert (tmp_path / "p.png").stat().st_size > 0
     assert animate_plan_world(g, tmp_path / "a.html", frames=4) == 4
     assert "player-selfcheck" in (tmp_path / "a.html").read_text()
+
+
+# --- closed-loop execution --------------------------------------------------------------
+
+@pytest.mark.slow
+def test_closed_loop_reaches_1e3_with_mismatch_where_open_loop_misses(run_cli):
+    status, out, _ = run_cli("execute", "trident-snake", "--to", "x=0.3,y=0.1,theta=0.2,phi1=0.1",
+                             "--mismatch", "r=0.05,l=-0.05", "--noise", "1e-5", "--seed", "2",
+                             "--json")
+    assert status == 0, out
+    data = json.loads(out)
+    assert data["schema"] == "nilpotent/execution@1" and data["success"] is True
+    assert data["closed_loop"]["violations"] == []
+    # independent: the applied controls on the true robot (r = 1.05, l = 0.95) by scipy
+    true = get_model("trident-snake", {"r": sp.Rational(105, 100), "l": sp.Rational(95, 100)})
+    q = resimulate(true, data["from"], data["closed_loop"]["segments"], samples=40)
+    goal = np.array(data["to"])
+    assert np.linalg.norm(q[-1] - goal) <= 1e-3
+    assert np.abs(q[:, 3:6]).max() <= 5 * math.pi / 6
+    assert data["open_loop"]["error"] > 10 * data["closed_loop"]["error"]
+    assert data["open_loop"]["error"] > 1e-2
+
+
+def test_mismatch_options_are_checked(run_cli):
+    for bad in ("q=0.1", "r=-1", "r"):
+        status, out, _ = run_cli("execute", "trident-snake", "--to", "x=0.1",
+                                 "--mismatch", bad, "--json")
+        assert status == 2 and "error" in json.loads(out)
