@@ -83,7 +83,7 @@ def execute_command(
     singular_margin: MarginOpt = 0.0,
     time_limit: TimeLimitOpt = 60.0,
     seed: SeedOpt = 0,
-    max_piece: MaxPieceOpt = 0.5,
+    max_piece: MaxPieceOpt = 1.0,
     mismatch: MismatchOpt = None,
     noise: NoiseOpt = 0.0,
     tol: ExecTolOpt = 1e-3,

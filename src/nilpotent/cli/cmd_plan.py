@@ -182,7 +182,7 @@ def plan_command(
     singular_margin: MarginOpt = 0.0,
     time_limit: TimeLimitOpt = 60.0,
     seed: SeedOpt = 0,
-    max_piece: MaxPieceOpt = 0.5,
+    max_piece: MaxPieceOpt = 1.0,
     anchor: AnchorOpt = "auto",
     max_iterations: MaxItOpt = 30,
     plot: PlotOpt = None,

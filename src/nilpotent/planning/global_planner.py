@@ -15,18 +15,22 @@ et al. 1994):
    re-simulated and checked at dense samples;
 3. a piece whose steered motion leaves the free space or the limits (or that
    cannot be steered) is halved (its chord's midpoint becomes a waypoint) and
-   retried.  The nilpotent motions shrink with the distance (homogeneity:
+   retried; intermediate waypoints are reached within
+   ``min(MID_TOL, MID_TOL_FRACTION · piece length)``, and when the state reached
+   is further than that from the chord, it is first steered back onto the
+   chord's start.  The nilpotent motions shrink with the distance (homogeneity:
    a displacement ``ε`` in a weight-``w`` direction costs motions of size
    ``ε^{1/w}``), so the steered motion of a short enough piece stays in any
    open tube around the chord and subdivision terminates on paths with
    positive clearance.
 
-Before that, a **direct** attempt: when the straight chord from start to goal
-is admissible, the single nilpotent plan of ``plan()`` (the old behaviour of
-``nilpotent plan``) is kept if its motion is admissible; this keeps earlier
-results unchanged for small problems.  Every returned plan is re-simulated as a
-whole (:func:`~nilpotent.planning.verify.verify_segments`, 200 samples per
-segment) and refused unless admissible and within ``tol`` of the goal.
+Before that, a **direct** attempt: when the goal is within ``DIRECT_RADIUS``
+and the straight chord from start to goal is admissible, the single nilpotent
+plan of ``plan()`` (the old behaviour of ``nilpotent plan``) is kept if its
+motion is admissible; this keeps earlier results unchanged for small problems.
+Every returned plan is re-simulated as a whole
+(:func:`~nilpotent.planning.verify.verify_segments`, 100 samples per segment)
+and refused unless admissible and within ``tol`` of the goal.
 """
 
 from __future__ import annotations
@@ -51,15 +55,23 @@ from nilpotent.planning.world import World
 
 __all__ = ["GlobalPlan", "Piece", "json_safe", "ompl_path", "plan_global"]
 
-#: Tolerance at intermediate waypoints (the next piece starts from the state reached).
-MID_TOL = 1e-3
+#: Largest tolerance at intermediate waypoints (the next piece starts from the state reached).
+MID_TOL = 0.05
+#: ... and at most this fraction of the piece's length (so that halving converges).
+MID_TOL_FRACTION = 0.1
+#: Clearance the global (holonomic) path keeps beyond the required one, at most (model length
+#: units; also at most half the start's and the goal's clearance): room for the steered motions.
+PATH_CLEARANCE = 0.2
 #: Default longest piece (Euclidean in configuration space) before steering.
-MAX_PIECE = 0.5
+MAX_PIECE = 1.0
 #: Pieces are not halved below this length: then planning fails.
 MIN_PIECE = 1e-3
 #: Samples per segment when a piece's motion is checked, and when the whole plan is verified.
-CHECK_POINTS = 60
-VERIFY_POINTS = 200
+CHECK_POINTS = 40
+VERIFY_POINTS = 100
+#: The direct attempt (one nilpotent plan, the old behaviour) is made for goals this close
+#: (configuration-space Euclidean distance).
+DIRECT_RADIUS = 2.0
 
 
 @dataclass(frozen=True)
@@ -225,7 +237,7 @@ def ompl_path(
     xg: np.ndarray,
     seconds: float,
     seed: int | None = None,
-    resolution: float = 0.01,
+    resolution: float = 0.05,
 ) -> list[np.ndarray]:
     """A collision-free configuration-space path from OMPL RRTConnect, simplified.
 
@@ -286,7 +298,7 @@ def _densify(points: Sequence[np.ndarray], max_piece: float) -> list[np.ndarray]
     out = [points[0]]
     for a, b in itertools.pairwise(points):
         k = max(1, math.ceil(float(np.linalg.norm(b - a)) / max_piece))
-        out += [a + (b - a) * (i / k) for i in range(1, k + 1)]
+        out += [a + (b - a) * (i / k) for i in range(1, k)] + [b.copy()]
     return out
 
 
@@ -336,6 +348,8 @@ def plan_global(
     direct: bool = True,
     anchor: str = "auto",
     max_iterations: int = 30,
+    clearance: float = 0.0,
+    path_clearance: float = PATH_CLEARANCE,
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -365,6 +379,15 @@ def plan_global(
         Try the single nilpotent plan first (see the module doc).
     anchor, max_iterations:
         Passed to :func:`~nilpotent.planning.iterative.plan` for every piece.
+    clearance:
+        Required distance robot–obstacles along the motion (> this; default 0:
+        no contact).
+    path_clearance:
+        Extra clearance the OMPL path keeps (at most half the start's and the
+        goal's clearance): the tube in which the steered motions of the pieces
+        have room (Laumond's approximation needs a path with positive clearance;
+        a path that grazes obstacles needs tiny pieces, whose number grows like
+        ``clearance^{-r}`` for a system of step ``r``).
 
     Raises
     ------
@@ -383,7 +406,7 @@ def plan_global(
         raise PlanningError(f"max_piece must be > 0, got {max_piece}")
     options: dict[str, Any] = {"engine": engine, "anchor": anchor,
                                "max_iterations": max_iterations}
-    checker = Checker(system, world, limits, singular_margin)
+    checker = Checker(system, world, limits, singular_margin, clearance)
     assert checker.limits is not None
     x0 = np.array([float(v) for v in start])  # type: ignore[arg-type]
     xg = np.array([float(v) for v in goal])  # type: ignore[arg-type]
@@ -417,7 +440,8 @@ def plan_global(
                           v, route, planner_s, time_limit, time.perf_counter() - t0)
 
     # 1. direct attempt (old behaviour)
-    if direct and _chord_valid(checker, x0, xg):
+    near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
+    if direct and near and _chord_valid(checker, x0, xg):
         p = _steer(system, checker, x0, xg, tol, options, endpoints_singular_raise=True)
         if p is not None and p.converged:
             piece = Piece(tuple(xg), 0, len(p.segments), p.error, len(p.iterations), 0)
@@ -426,14 +450,21 @@ def plan_global(
                               "direct", 0.0, p)
             except PlanningError:
                 pass
-    # 2. a path in configuration space
+    # 2. a path in configuration space, with room around it where possible
     planner_s = 0.0
-    if _chord_valid(checker, x0, xg):
+    path_checker = checker
+    if world is not None and path_clearance > 0:
+        ends = checker.measures(np.vstack([x0, xg]))[0] - checker.clearance
+        extra = min(path_clearance, 0.5 * float(ends.min()))
+        if extra > 0:
+            path_checker = Checker(system, world, checker.limits, singular_margin,
+                                   checker.clearance + extra)
+    if _chord_valid(path_checker, x0, xg):
         path = [x0, xg]
     else:
         budget = max(0.1, 0.5 * (deadline - time.perf_counter()))
         t_ompl = time.perf_counter()
-        path = ompl_path(checker, x0, xg, budget, seed)
+        path = ompl_path(path_checker, x0, xg, budget, seed)
         planner_s = time.perf_counter() - t_ompl
     waypoints = _densify(path, max_piece)
     # 3. steer piece by piece, halving pieces whose motion is not admissible
@@ -452,9 +483,21 @@ def plan_global(
             )
         w, halvings = targets[0]
         final = len(targets) == 1
-        p = _steer(system, checker, x, w, tol if final else max(tol, MID_TOL), options)
-        if p is None or not (p.converged or not final):
-            if float(np.linalg.norm(w - prev)) < MIN_PIECE:
+        length = float(np.linalg.norm(w - prev))
+        piece_tol = tol if final else max(tol, min(MID_TOL, MID_TOL_FRACTION * length))
+        p = _steer(system, checker, x, w, piece_tol, options)
+        if p is None or (final and not p.converged):
+            off = float(np.linalg.norm(x - prev))
+            if length == 0.0:
+                raise PlanningError(
+                    f"cannot steer back onto the path at {np.array2string(w, precision=3)} "
+                    f"from {off:.3g} away inside the free space and limits"
+                )
+            if off > max(tol, MID_TOL_FRACTION * length):
+                # the state reached is far off the path relative to this piece: back onto it
+                targets.appendleft((prev.copy(), halvings))
+                continue
+            if length < MIN_PIECE:
                 raise PlanningError(
                     f"cannot steer inside the free space and limits near "
                     f"{np.array2string(w, precision=3)}: pieces down to {MIN_PIECE:g} fail"

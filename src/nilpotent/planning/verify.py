@@ -97,12 +97,22 @@ class Checker:
         return clear, lim, sing
 
     def valid(self, q: np.ndarray) -> np.ndarray:
-        """Boolean ``(N,)``: every limit holds, no contact, singular margin kept."""
-        clear, lim, sing = self.measures(q)
-        ok = (clear > self.clearance) & (lim >= 0)
+        """Boolean ``(N,)``: every limit holds, no contact, singular margin kept.
+
+        The same verdict as :meth:`measures` (clearance ``> self.clearance``,
+        limit margin ``≥ 0``, singular margin ``≥ self.singular_margin``), with
+        shapely's predicates instead of distances (faster).
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        ok = np.all(np.isfinite(q), axis=1)
+        ok &= self.robot.limit_margin(q) >= 0  # type: ignore[attr-defined]
         if self.margin_fn is not None:  # type: ignore[attr-defined]
-            ok &= sing >= self.singular_margin
-        return ok & np.all(np.isfinite(np.atleast_2d(q)), axis=1)
+            ok &= self.margin_fn(q) >= self.singular_margin  # type: ignore[attr-defined]
+        if self.world is not None and ok.any():
+            geoms, radii = self.robot.parts(q[ok])  # type: ignore[attr-defined]
+            hit = self.world.collides(geoms, radii, self.clearance).any(axis=1)
+            ok[np.flatnonzero(ok)[hit]] = False
+        return ok
 
     def why_invalid(self, q: Sequence[float]) -> str:
         """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""

@@ -106,6 +106,25 @@ class World:
             out = np.minimum(out, d.min(axis=-1))
         return out - radii
 
+    def collides(
+        self, geoms: np.ndarray, radii: np.ndarray | float = 0.0, margin: float = 0.0
+    ) -> np.ndarray:
+        """Boolean, same shape as ``geoms``: :meth:`clearance` ``≤ margin`` (contact, overlap,
+        leaving the bounds, or closer than ``margin``), by shapely's predicates
+        (``intersects`` on the prepared obstacles where the distance allowed is 0,
+        ``dwithin`` elsewhere) without computing distances."""
+        geoms = np.asarray(geoms)
+        reach = np.broadcast_to(np.asarray(radii, dtype=float) + margin, geoms.shape)
+        out = np.zeros(geoms.shape, dtype=bool)
+        if self._blocked is not None:
+            flat = reach <= 0
+            out[flat] = shapely.intersects(self._blocked, geoms[flat])
+            out[~flat] = shapely.dwithin(geoms[~flat], self._blocked, reach[~flat])
+        if self._centres is not None:
+            near = shapely.dwithin(geoms[..., None], self._centres, reach[..., None] + self._radii)
+            out |= near.any(axis=-1)
+        return out
+
     def point_clearance(self, xy: np.ndarray) -> np.ndarray:
         """:meth:`clearance` of points ``(..., 2)``."""
         return self.clearance(shapely.points(np.asarray(xy, dtype=float)))
