@@ -20,6 +20,7 @@ from nilpotent.cli.app import (
     stdout_console,
 )
 from nilpotent.cli.cmd_plan import (
+    ClearanceOpt,
     FromOpt,
     LimitOpt,
     MarginOpt,
@@ -81,6 +82,7 @@ def execute_command(
     world: WorldOpt = None,
     limit: LimitOpt = None,
     singular_margin: MarginOpt = 0.0,
+    clearance: ClearanceOpt = 0.0,
     time_limit: TimeLimitOpt = 60.0,
     seed: SeedOpt = 0,
     max_piece: MaxPieceOpt = 1.0,
@@ -115,7 +117,8 @@ def execute_command(
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
     glob = plan_from_options(system, start, goal, min(1e-8, tol), world, limit,
-                             singular_margin, time_limit, seed, max_piece, quiet=json_out)
+                             singular_margin, time_limit, seed, max_piece, quiet=json_out,
+                             clearance=clearance)
     if not json_out:
         stderr_console().print("executing on the perturbed robot ...")
     result = execute_plan(glob, fractions, noise, seed, tol, max_corrections, time_limit)

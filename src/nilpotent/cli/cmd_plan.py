@@ -66,6 +66,11 @@ TimeLimitOpt = Annotated[
     typer.Option("--time-limit", metavar="S",
                  help="Give up (exit 2, nothing written) when no plan is found within S seconds."),
 ]
+ClearanceOpt = Annotated[
+    float,
+    typer.Option("--clearance", metavar="D",
+                 help="Keep the robot more than D (model length units) from every obstacle."),
+]
 SeedOpt = Annotated[int, typer.Option("--seed", metavar="N", help="Seed of the global planner.")]
 MaxPieceOpt = Annotated[
     float,
@@ -180,6 +185,7 @@ def plan_command(
     world: WorldOpt = None,
     limit: LimitOpt = None,
     singular_margin: MarginOpt = 0.0,
+    clearance: ClearanceOpt = 0.0,
     time_limit: TimeLimitOpt = 60.0,
     seed: SeedOpt = 0,
     max_piece: MaxPieceOpt = 1.0,
@@ -216,7 +222,7 @@ def plan_command(
     goal = parse_point_option(to, system, option="--to")
     result = plan_from_options(
         system, start, goal, tol, world, limit, singular_margin, time_limit, seed, max_piece,
-        anchor=anchor, max_iterations=max_iterations, quiet=json_out,
+        anchor=anchor, max_iterations=max_iterations, quiet=json_out, clearance=clearance,
     )
     write_pictures(result, plot, animate)
     if json_out:
@@ -226,13 +232,18 @@ def plan_command(
 
 
 def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
-                      max_piece, *, anchor="auto", max_iterations=30, quiet=False):
+                      max_piece, *, anchor="auto", max_iterations=30, quiet=False,
+                      clearance=0.0):
     """Load the world, merge the limits and run the global planner (shared with ``execute``)."""
     from nilpotent.planning.global_planner import plan_global
     from nilpotent.planning.world import load_world
 
     if not (math.isfinite(singular_margin) and singular_margin >= 0):
         raise OptionError(f"--singular-margin must be >= 0, got {singular_margin}")
+    if not (math.isfinite(clearance) and clearance >= 0):
+        raise OptionError(f"--clearance must be >= 0, got {clearance}")
+    if clearance > 0 and world is None:
+        raise OptionError("--clearance needs a --world (there is nothing to keep away from)")
     limits = system.limits.tightened(parse_limit_options(limit, system))
     the_world = load_world(world) if world is not None else None
     if not quiet:
@@ -240,7 +251,7 @@ def plan_from_options(system, start, goal, tol, world, limit, singular_margin, t
     return plan_global(
         system, start, goal, tol, world=the_world, limits=limits,
         singular_margin=singular_margin, time_limit=time_limit, seed=seed,
-        max_piece=max_piece, anchor=anchor, max_iterations=max_iterations,
+        max_piece=max_piece, anchor=anchor, max_iterations=max_iterations, clearance=clearance,
     )
 
 

@@ -191,8 +191,9 @@ def execute_plan(
     model = glob.plan.system
     true = perturbed_system(model, mismatch)
     rng = np.random.default_rng(seed)
-    nominal = Checker(model, glob.world, glob.limits, glob.singular_margin)
-    actual = Checker(true, glob.world, glob.limits, glob.singular_margin)
+    nominal = Checker(model, glob.world, glob.limits, glob.singular_margin,
+                      glob.clearance_required)
+    actual = Checker(true, glob.world, glob.limits, glob.singular_margin, glob.clearance_required)
     x0 = np.array(glob.plan.start)
     goal = np.array(glob.plan.goal)
     options = {"engine": "auto", "anchor": "auto", "max_iterations": 30}
@@ -211,7 +212,7 @@ def execute_plan(
             )
         g = plan_global(model, x_meas, target, piece_tol, world=glob.world, limits=glob.limits,
                         singular_margin=glob.singular_margin, time_limit=time_limit,
-                        seed=seed)
+                        seed=seed, clearance=glob.clearance_required)
         return list(g.plan.segments)
 
     x = x0.copy()

@@ -123,6 +123,7 @@ class GlobalPlan:
     planner_seconds: float = 0.0
     time_limit: float = math.inf
     seconds: float = field(default=0.0)
+    clearance_required: float = 0.0
 
     @property
     def error(self) -> float:
@@ -153,6 +154,7 @@ class GlobalPlan:
             "limit_margin": v.limit_margin,
             "min_singular_margin": v.min_singular_margin,
             "singular_margin": self.singular_margin,
+            "clearance_required": self.clearance_required,
             "route": self.route,
             "planner_seconds": self.planner_seconds,
             "seconds": self.seconds,
@@ -437,7 +439,8 @@ def plan_global(
         )
         return GlobalPlan(whole, world, checker.limits, singular_margin,  # type: ignore[arg-type]
                           tuple(tuple(float(c) for c in w) for w in waypoints), tuple(pieces),
-                          v, route, planner_s, time_limit, time.perf_counter() - t0)
+                          v, route, planner_s, time_limit, time.perf_counter() - t0,
+                          checker.clearance)
 
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
