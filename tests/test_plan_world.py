@@ -384,3 +384,16 @@ def test_mismatch_options_are_checked(run_cli):
         status, out, _ = run_cli("execute", "trident-snake", "--to", "x=0.1",
                                  "--mismatch", bad, "--json")
         assert status == 2 and "error" in json.loads(out)
+
+
+def test_car_trailers_outline_matches_the_documented_sizes():
+    """Car: 0.1 behind to 0.7 ahead of (x, y), 0.5 wide; trailer 1 at (x − d1, y) when all
+    headings are 0: 0.2 behind to 0.3 ahead, 0.4 wide; hitch bar between the axle centres."""
+    s = get_model("car-trailers:1", {"d1": 2})
+    pts = Checker(s).robot.points(np.array([[1.0, 2.0, 0.0, 0.0]]))
+    car, trailer = (np.asarray(p[0]) for p in pts["polygons"])
+    assert np.allclose(sorted(map(tuple, car)),
+                       sorted([(0.9, 1.75), (1.7, 1.75), (1.7, 2.25), (0.9, 2.25)]))
+    assert np.allclose(sorted(map(tuple, trailer)),
+                       sorted([(-1.2, 1.8), (-0.7, 1.8), (-0.7, 2.2), (-1.2, 2.2)]))
+    assert np.allclose(pts["segments"][0, 0], [[-1.0, 2.0], [1.0, 2.0]])

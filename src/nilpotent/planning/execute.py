@@ -35,9 +35,9 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.global_planner import (
     MID_TOL,
     GlobalPlan,
-    _steer,
     json_safe,
     plan_global,
+    steer_admissible,
 )
 from nilpotent.planning.simulation import simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_states
@@ -202,7 +202,7 @@ def execute_plan(
         return x + (rng.normal(0.0, noise, x.shape) if noise > 0 else 0.0)
 
     def controls(x_meas: np.ndarray, target: np.ndarray, piece_tol: float) -> list[Segment]:
-        p = _steer(model, nominal, x_meas, target, piece_tol, options)
+        p = steer_admissible(model, nominal, x_meas, target, piece_tol, options)
         if p is not None:
             return list(p.segments)
         if not nominal.valid(x_meas[None, :])[0]:

@@ -310,7 +310,7 @@ def _chord_valid(checker: Checker, a: np.ndarray, b: np.ndarray, step: float = 0
     return bool(np.all(checker.valid(a + t * (b - a))))
 
 
-def _steer(
+def steer_admissible(
     system: ControlSystem, checker: Checker, x: np.ndarray, w: np.ndarray, tol: float,
     options: dict[str, Any],
     endpoints_singular_raise: bool = False,
@@ -445,7 +445,7 @@ def plan_global(
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
     if direct and near and _chord_valid(checker, x0, xg):
-        p = _steer(system, checker, x0, xg, tol, options, endpoints_singular_raise=True)
+        p = steer_admissible(system, checker, x0, xg, tol, options, endpoints_singular_raise=True)
         if p is not None and p.converged:
             piece = Piece(tuple(xg), 0, len(p.segments), p.error, len(p.iterations), 0)
             try:
@@ -488,7 +488,7 @@ def plan_global(
         final = len(targets) == 1
         length = float(np.linalg.norm(w - prev))
         piece_tol = tol if final else max(tol, min(MID_TOL, MID_TOL_FRACTION * length))
-        p = _steer(system, checker, x, w, piece_tol, options)
+        p = steer_admissible(system, checker, x, w, piece_tol, options)
         if p is None or (final and not p.converged):
             off = float(np.linalg.norm(x - prev))
             if length == 0.0:

@@ -94,12 +94,16 @@ class Robot:
                          for v in vals], axis=1)
 
     def parts(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Shapely geometries ``(N, P)`` of the outline's parts and their radii ``(P,)``.
+        """Shapely geometries ``(N, P)`` of the outline's parts and their radii ``(N, P)``.
 
-        Polygons and segments have radius 0; discs are their centre points
-        with their radius (``(N, P)`` array of radii when they depend on
-        ``q``; here radii are evaluated per configuration and returned as
-        ``(N, P)``).
+        ``P`` = polygons + segments + discs, in that order.  Polygons and
+        segments have radius 0; a disc is its centre point with its radius
+        (evaluated per configuration: it may depend on the parameters).
+
+        Raises
+        ------
+        OptionError
+            Wrong number of coordinates, or a model without outline.
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
         if q.shape[1] != self.system.n:
