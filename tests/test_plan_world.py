@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -31,6 +32,7 @@ from nilpotent.planning.verify import Checker
 from nilpotent.planning.world import World, world_from_dict
 
 ALPHA = (0.0, 2 * math.pi / 3, 4 * math.pi / 3)
+ROOM = Path(__file__).resolve().parents[1] / "examples" / "worlds" / "room.toml"
 
 UNICYCLE = {
     "coordinates": ["x", "y", "theta"],
@@ -326,7 +328,7 @@ def test_blocked_goal_and_time_limit_raise_planning_error():
 def test_cli_failure_writes_nothing(run_cli, tmp_path):
     png = tmp_path / "p.png"
     status, out, _ = run_cli("plan", "trident-snake", "--to", "x=9,y=-2",
-                             "--world", "examples/worlds/room.toml", "--time-limit", "0.5",
+                             "--world", str(ROOM), "--time-limit", "0.5",
                              "--plot", str(png), "--json")
     assert status == 2
     assert json.loads(out)["error"]["kind"] == "planning"
@@ -397,3 +399,11 @@ def test_car_trailers_outline_matches_the_documented_sizes():
     assert np.allclose(sorted(map(tuple, trailer)),
                        sorted([(-1.2, 1.8), (-0.7, 1.8), (-0.7, 2.2), (-1.2, 2.2)]))
     assert np.allclose(pts["segments"][0, 0], [[-1.0, 2.0], [1.0, 2.0]])
+
+
+def test_example_room_world_loads():
+    from nilpotent.planning.world import load_world
+
+    w = load_world(ROOM)
+    assert w.name == "room" and w.bounds == ((-5.0, 13.0), (-6.0, 6.0))
+    assert len(w.polygons) == 2 and len(w.discs) == 1
