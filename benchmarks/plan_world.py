@@ -175,8 +175,10 @@ def run_kinodynamic(system, checker: Checker, start, goal, budget: float, seed: 
     return True, seconds, duration, math.nan
 
 
-def summary(rows: list[tuple]) -> tuple[float, float, float, float]:
-    ok = [r for r in rows if r[0]]
+def summary(rows: list[tuple], budget: float) -> tuple[float, float, float, float]:
+    """Success rate (a plan within the budget: a plan found later counts as a failure),
+    median time of all queries, median time and path duration of the successes."""
+    ok = [r for r in rows if r[0] and r[1] <= budget]
     rate = 100.0 * len(ok) / len(rows) if rows else math.nan
     med_t = statistics.median(r[1] for r in rows) if rows else math.nan
     med_ok_t = statistics.median(r[1] for r in ok) if ok else math.nan
@@ -214,7 +216,7 @@ def main() -> None:
                     )
                 print(f"{wname} {method} {k}: ok={rows[-1][0]} t={rows[-1][1]:.2f}s "
                       f"duration={rows[-1][2]:.3g} clearance={rows[-1][3]:.3g}", flush=True)
-            rate, med_t, med_ok_t, med_d = summary(rows)
+            rate, med_t, med_ok_t, med_d = summary(rows, args.time_limit)
             lines.append((wname, spec["model"], method, len(rows), rate, med_t, med_ok_t, med_d))
     print()
     header = ("world", "model", "method", "pairs", "success %", "median s (all)",

@@ -329,7 +329,7 @@ def steer_admissible(
         return None
     except (PlanningError, IntegrationError):
         return None
-    if not np.all(checker.valid(p.trajectory.states)):
+    if not checker.valid_motion(p.trajectory.states):
         return None
     return p
 

@@ -96,23 +96,51 @@ class Checker:
             sing = self.margin_fn(q)  # type: ignore[attr-defined]
         return clear, lim, sing
 
-    def valid(self, q: np.ndarray) -> np.ndarray:
+    def valid(
+        self, q: np.ndarray, extra_clearance: float = 0.0, limit_slack: float = 0.0
+    ) -> np.ndarray:
         """Boolean ``(N,)``: every limit holds, no contact, singular margin kept.
 
         The same verdict as :meth:`measures` (clearance ``> self.clearance``,
         limit margin ``≥ 0``, singular margin ``≥ self.singular_margin``), with
-        shapely's predicates instead of distances (faster).
+        shapely's predicates instead of distances (faster).  ``extra_clearance``
+        and ``limit_slack`` demand more (used to cover the motion between samples).
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
         ok = np.all(np.isfinite(q), axis=1)
-        ok &= self.robot.limit_margin(q) >= 0  # type: ignore[attr-defined]
+        ok &= self.robot.limit_margin(q) >= limit_slack  # type: ignore[attr-defined]
         if self.margin_fn is not None:  # type: ignore[attr-defined]
             ok &= self.margin_fn(q) >= self.singular_margin  # type: ignore[attr-defined]
         if self.world is not None and ok.any():
             geoms, radii = self.robot.parts(q[ok])  # type: ignore[attr-defined]
-            hit = self.world.collides(geoms, radii, self.clearance).any(axis=1)
+            hit = self.world.collides(geoms, radii, self.clearance + extra_clearance).any(axis=1)
             ok[np.flatnonzero(ok)[hit]] = False
         return ok
+
+    def valid_motion(self, states: np.ndarray) -> bool:
+        """Every sample of a motion ``(N, n)`` admissible, with margins that cover the
+        motion between consecutive samples: half the largest step of a limited
+        coordinate (limits), half the largest displacement of an outline point
+        (clearance).  Exact for straight motion between samples, a first-order
+        cover otherwise; the whole plan is re-verified more densely anyway.
+        """
+        q = np.atleast_2d(np.asarray(states, dtype=float))
+        slack = extra = 0.0
+        if len(q) > 1:
+            names = self.system.coordinate_names
+            assert self.limits is not None
+            cols = [names.index(k) for k, _, _ in self.limits.bounds]
+            if cols:
+                slack = 0.5 * float(np.abs(np.diff(q[:, cols], axis=0)).max())
+            if self.world is not None:
+                pts = self.robot.points(q)  # type: ignore[attr-defined]
+                moved = [np.diff(p, axis=0) for p in pts["polygons"]]
+                moved += [np.diff(pts["segments"], axis=0), np.diff(pts["discs"], axis=0)]
+                extra = 0.5 * max(
+                    (float(np.linalg.norm(m, axis=-1).max()) for m in moved if m.size),
+                    default=0.0,
+                )
+        return bool(np.all(self.valid(q, extra, slack)))
 
     def why_invalid(self, q: Sequence[float]) -> str:
         """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""
