@@ -407,3 +407,31 @@ def test_example_room_world_loads():
     w = load_world(ROOM)
     assert w.name == "room" and w.bounds == ((-5.0, 13.0), (-6.0, 6.0))
     assert len(w.polygons) == 2 and len(w.discs) == 1
+
+
+def test_user_model_file_with_outline_plans_around_a_disc(run_cli, tmp_path):
+    """A unicycle of radius 0.2 (model file [geometry]) passes a post of radius 0.3."""
+    model = tmp_path / "bot.toml"
+    model.write_text(
+        'coordinates = ["x", "y", "theta"]\n'
+        "[parameters]\nrho = 0.2\n"
+        '[[fields]]\nx = "cos(theta)"\ny = "sin(theta)"\n'
+        '[[fields]]\ntheta = "1"\n'
+        '[limits]\ntheta = ["-pi/2", "pi/2"]\n'
+        '[[geometry.discs]]\ncenter = ["x", "y"]\nradius = "rho"\n'
+    )
+    world = tmp_path / "w.toml"
+    world.write_text('[bounds]\nx = [-1.0, 3.0]\ny = [-1.5, 1.5]\n'
+                     "[[obstacles]]\ndisc = { center = [1.0, 0.0], radius = 0.3 }\n")
+    status, out, _ = run_cli("plan", str(model), "--to", "x=2", "--world", str(world),
+                             "--tol", "1e-6", "--json")
+    assert status == 0, out
+    data = json.loads(out)
+    q = resimulate(system_from_dict(
+        {"coordinates": ["x", "y", "theta"], "parameters": {"rho": 0.2},
+         "fields": [{"x": "cos(theta)", "y": "sin(theta)"}, {"theta": "1"}]}),
+        data["from"], data["segments"])
+    assert np.linalg.norm(q[-1] - np.array([2.0, 0, 0])) <= 1e-5
+    assert (np.hypot(q[:, 0] - 1.0, q[:, 1]) > 0.5).all()        # 0.3 + 0.2
+    assert (np.abs(q[:, 2]) <= math.pi / 2 + 1e-9).all()
+    assert data["clearance"] > 0 and data["world"] == "w"
