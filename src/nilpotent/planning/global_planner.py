@@ -39,7 +39,7 @@ import itertools
 import math
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -59,9 +59,10 @@ __all__ = ["GlobalPlan", "Piece", "json_safe", "ompl_path", "plan_global"]
 MID_TOL = 0.05
 #: ... and at most this fraction of the piece's length (so that halving converges).
 MID_TOL_FRACTION = 0.1
-#: Clearance the global (holonomic) path keeps beyond the required one, at most (model length
-#: units; also at most half the start's and the goal's clearance): room for the steered motions.
+#: Clearance the global (holonomic) path keeps beyond the required one (model length units),
+#: except within ``PATH_END_ZONE`` of the start and the goal: room for the steered motions.
 PATH_CLEARANCE = 0.2
+PATH_END_ZONE = 1.0
 #: Default longest piece (Euclidean in configuration space) before steering.
 MAX_PIECE = 1.0
 #: Pieces are not halved below this length: then planning fails.
@@ -240,11 +241,13 @@ def ompl_path(
     seconds: float,
     seed: int | None = None,
     resolution: float = 0.05,
+    valid: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> list[np.ndarray]:
     """A collision-free configuration-space path from OMPL RRTConnect, simplified.
 
     ``resolution``: largest step (configuration-space units) at which OMPL checks
-    straight motions between states.
+    straight motions between states.  ``valid``: the validity of a batch of
+    configurations (default ``checker.valid``; ``checker`` also gives the box).
 
     Raises
     ------
@@ -268,11 +271,13 @@ def ompl_path(
     space.setBounds(bounds)
     setup = og.SimpleSetup(space)
 
-    def valid(state: Any) -> bool:
-        q = np.array([state[j] for j in range(n)])
-        return bool(checker.valid(q[None, :])[0])
+    is_valid = checker.valid if valid is None else valid
 
-    setup.setStateValidityChecker(valid)
+    def state_valid(state: Any) -> bool:
+        q = np.array([state[j] for j in range(n)])
+        return bool(is_valid(q[None, :])[0])
+
+    setup.setStateValidityChecker(state_valid)
     extent = float(np.linalg.norm(hi - lo))
     setup.getSpaceInformation().setStateValidityCheckingResolution(
         min(0.05, resolution / max(extent, 1e-12))
@@ -304,10 +309,29 @@ def _densify(points: Sequence[np.ndarray], max_piece: float) -> list[np.ndarray]
     return out
 
 
-def _chord_valid(checker: Checker, a: np.ndarray, b: np.ndarray, step: float = 0.01) -> bool:
+def _chord_valid(
+    valid: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray, step: float = 0.01
+) -> bool:
     k = max(2, math.ceil(float(np.linalg.norm(b - a)) / step) + 1)
     t = np.linspace(0.0, 1.0, k)[:, None]
-    return bool(np.all(checker.valid(a + t * (b - a))))
+    return bool(np.all(valid(a + t * (b - a))))
+
+
+def _roomy(
+    checker: Checker, x0: np.ndarray, xg: np.ndarray, extra: float, near: float
+) -> Callable[[np.ndarray], np.ndarray]:
+    """Validity with ``extra`` clearance, except within ``near`` of the start or the goal
+    (configuration space), where the plain validity suffices."""
+
+    def valid(q: np.ndarray) -> np.ndarray:
+        q = np.atleast_2d(q)
+        ok = checker.valid(q)
+        far = ok & (np.linalg.norm(q - x0, axis=1) > near) & (np.linalg.norm(q - xg, axis=1) > near)
+        if far.any():
+            ok[far] = checker.valid(q[far], extra_clearance=extra)
+        return ok
+
+    return valid
 
 
 def steer_admissible(
@@ -385,11 +409,11 @@ def plan_global(
         Required distance robot–obstacles along the motion (> this; default 0:
         no contact).
     path_clearance:
-        Extra clearance the OMPL path keeps (at most half the start's and the
-        goal's clearance): the tube in which the steered motions of the pieces
-        have room (Laumond's approximation needs a path with positive clearance;
-        a path that grazes obstacles needs tiny pieces, whose number grows like
-        ``clearance^{-r}`` for a system of step ``r``).
+        Extra clearance the OMPL path keeps (except within ``PATH_END_ZONE`` of
+        the start and the goal, configuration space): the tube in which the
+        steered motions of the pieces have room (Laumond's approximation needs
+        a path with positive clearance; a path that grazes obstacles needs
+        tiny pieces, whose number grows like ``clearance^{-r}`` for a system of step ``r``).
 
     Raises
     ------
@@ -444,7 +468,7 @@ def plan_global(
 
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
-    if direct and near and _chord_valid(checker, x0, xg):
+    if direct and near and _chord_valid(checker.valid, x0, xg):
         p = steer_admissible(system, checker, x0, xg, tol, options, endpoints_singular_raise=True)
         if p is not None and p.converged:
             piece = Piece(tuple(xg), 0, len(p.segments), p.error, len(p.iterations), 0)
@@ -455,19 +479,15 @@ def plan_global(
                 pass
     # 2. a path in configuration space, with room around it where possible
     planner_s = 0.0
-    path_checker = checker
+    path_valid = checker.valid
     if world is not None and path_clearance > 0:
-        ends = checker.measures(np.vstack([x0, xg]))[0] - checker.clearance
-        extra = min(path_clearance, 0.5 * float(ends.min()))
-        if extra > 0:
-            path_checker = Checker(system, world, checker.limits, singular_margin,
-                                   checker.clearance + extra)
-    if _chord_valid(path_checker, x0, xg):
+        path_valid = _roomy(checker, x0, xg, path_clearance, PATH_END_ZONE)
+    if _chord_valid(path_valid, x0, xg):
         path = [x0, xg]
     else:
         budget = max(0.1, 0.5 * (deadline - time.perf_counter()))
         t_ompl = time.perf_counter()
-        path = ompl_path(path_checker, x0, xg, budget, seed)
+        path = ompl_path(checker, x0, xg, budget, seed, valid=path_valid)
         planner_s = time.perf_counter() - t_ompl
     waypoints = _densify(path, max_piece)
     # 3. steer piece by piece, halving pieces whose motion is not admissible
