@@ -14,10 +14,12 @@ from nilpotent.cli.app import (
     app,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_point_option,
-    stderr_console,
+    print_heading,
     stdout_console,
+    work,
 )
 from nilpotent.cli.cmd_plan import (
     ClearanceOpt,
@@ -116,19 +118,19 @@ def execute_command(
     perturbed_system(system, fractions)  # refuse bad names before planning
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
-    glob = plan_from_options(system, start, goal, min(1e-8, tol), world, limit,
-                             singular_margin, time_limit, seed, max_piece, quiet=json_out,
-                             clearance=clearance)
-    if not json_out:
-        stderr_console().print("executing on the perturbed robot ...")
-    result = execute_plan(glob, fractions, noise, seed, tol, max_corrections, time_limit)
+    with work(f"plan {system.name}"):
+        glob = plan_from_options(system, start, goal, min(1e-8, tol), world, limit,
+                                 singular_margin, time_limit, seed, max_piece,
+                                 clearance=clearance)
+    with work(f"execute on the perturbed {system.name}"):
+        result = execute_plan(glob, fractions, noise, seed, tol, max_corrections, time_limit)
     if json_out:
         emit_json(result.to_json())
         return
     console = stdout_console()
     c, o = result.closed_loop, result.open_loop
     mism = ", ".join(f"{k} {v:+.3g}" for k, v in fractions.items()) or "none"
-    console.print(f"[bold]{system.name}[/bold]: mismatch {mism}, noise {noise:g}, seed {seed}")
+    print_heading(console, system.name, f": mismatch {literal(mism)}, noise {noise:g}, seed {seed}")
     console.print(f"closed loop: error {c.error:.3e} (measured {result.measured_error:.3e}) "
                   f"after {result.replans} re-plans; violations: "
                   f"{'; '.join(result.violations) or 'none'}")

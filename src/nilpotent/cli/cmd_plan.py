@@ -10,19 +10,24 @@ from typing import Annotated
 import typer
 
 from nilpotent.cli.app import (
+    MAX_ITERATIONS,
     JsonOpt,
     ModelArg,
     ParamOpt,
     PlotOpt,
     app,
+    bounded_int,
     check_plot_path,
+    check_writable,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_point_option,
+    print_heading,
     save_figure,
-    stderr_console,
     stdout_console,
+    work,
     write_atomically,
 )
 from nilpotent.errors import OptionError
@@ -83,7 +88,10 @@ AnchorOpt = Annotated[
                  help="Where to approximate: current (every iterate), goal, start, or auto."),
 ]
 MaxItOpt = Annotated[
-    int, typer.Option("--max-iterations", metavar="N", help="Most nilpotent steps (>= 1).")
+    int,
+    typer.Option("--max-iterations", metavar="N",
+                 help=f"Most nilpotent steps (1 to {MAX_ITERATIONS}).",
+                 parser=bounded_int("--max-iterations", 1, MAX_ITERATIONS)),
 ]
 
 
@@ -121,16 +129,17 @@ def _check_outputs(plot: Path | None, animate: Path | None) -> None:
     check_plot_path(plot)
     if animate is not None and animate.suffix.lower() not in ANIMATION_SUFFIXES:
         raise OptionError(
-            f"--animate {animate}: unknown animation type (use {', '.join(ANIMATION_SUFFIXES)})"
+            f"--animate {literal(animate)}: unknown animation type "
+            f"(use {', '.join(ANIMATION_SUFFIXES)})"
         )
     if animate is not None and animate.suffix.lower() == ".mp4":
         from matplotlib import animation
 
         if not animation.writers.is_available("ffmpeg"):
-            raise OptionError(f"--animate {animate}: writing .mp4 needs ffmpeg (use .gif or .html)")
-    for path, option in ((plot, "--plot"), (animate, "--animate")):
-        if path is not None and not path.parent.resolve().is_dir():
-            raise OptionError(f"{option} {path}: folder {path.parent} does not exist")
+            raise OptionError(
+                f"--animate {literal(animate)}: writing .mp4 needs ffmpeg (use .gif or .html)"
+            )
+    check_writable(animate, "--animate")
 
 
 def _print_plan(glob) -> None:
@@ -139,8 +148,9 @@ def _print_plan(glob) -> None:
     result = glob.plan
     console = stdout_console()
     sys = result.system
-    console.print(
-        f"[bold]{sys.name}[/bold]: {len(result.iterations)} iteration(s), "
+    print_heading(
+        console, sys.name,
+        f": {len(result.iterations)} iteration(s), "
         f"{len(result.segments)} segment(s), total time {result.duration:.4g}; "
         f"approximation {result.builder}, anchor {result.anchor}"
     )
@@ -162,7 +172,7 @@ def _print_plan(glob) -> None:
     v = glob.verification
     console.print(
         f"route {glob.route}: {len(glob.waypoints)} waypoint(s), {len(glob.pieces)} piece(s)"
-        + (f", world {glob.world.name}" if glob.world is not None else "")
+        + (f", world {literal(glob.world.name)}" if glob.world is not None else "")
     )
     lim = ", ".join(f"{k} in [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in glob.limits.as_dict().items())
     console.print(f"limits: {lim or 'none'}; limits kept: {v.limits_ok}")
@@ -209,7 +219,8 @@ def plan_command(
     if not (math.isfinite(tol) and tol > 0):
         raise OptionError(f"--tol must be a positive number, got {tol}")
     if anchor != "auto" and anchor not in ANCHORS:
-        raise OptionError(f"--anchor must be auto, {', '.join(ANCHORS)}; got {anchor!r}")
+        raise OptionError(
+            f"--anchor must be auto, {', '.join(ANCHORS)}; got {literal(anchor, 60)!r}")
     if max_iterations < 1:
         raise OptionError(f"--max-iterations must be >= 1, got {max_iterations}")
     if not (math.isfinite(time_limit) and time_limit > 0):
@@ -220,10 +231,12 @@ def plan_command(
     system = load_model_option(model, param)
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
-    result = plan_from_options(
-        system, start, goal, tol, world, limit, singular_margin, time_limit, seed, max_piece,
-        anchor=anchor, max_iterations=max_iterations, quiet=json_out, clearance=clearance,
-    )
+    with work(f"plan {system.name}"):
+        result = plan_from_options(
+            system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
+            max_piece, anchor=anchor, max_iterations=max_iterations,
+            clearance=clearance,
+        )
     write_pictures(result, plot, animate)
     if json_out:
         emit_json(result.to_json())
@@ -232,8 +245,7 @@ def plan_command(
 
 
 def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
-                      max_piece, *, anchor="auto", max_iterations=30, quiet=False,
-                      clearance=0.0):
+                      max_piece, *, anchor="auto", max_iterations=30, clearance=0.0):
     """Load the world, merge the limits and run the global planner (shared with ``execute``)."""
     from nilpotent.planning.global_planner import plan_global
     from nilpotent.planning.world import load_world
@@ -246,8 +258,6 @@ def plan_from_options(system, start, goal, tol, world, limit, singular_margin, t
         raise OptionError("--clearance needs a --world (there is nothing to keep away from)")
     limits = system.limits.tightened(parse_limit_options(limit, system))
     the_world = load_world(world) if world is not None else None
-    if not quiet:
-        stderr_console().print(f"planning {system.name} ...")
     return plan_global(
         system, start, goal, tol, world=the_world, limits=limits,
         singular_margin=singular_margin, time_limit=time_limit, seed=seed,
@@ -260,9 +270,12 @@ def write_pictures(result, plot: Path | None, animate: Path | None) -> None:
     if plot is not None:
         from nilpotent.viz.plan_world import plot_plan_world
 
-        save_figure(plot_plan_world(result), plot)
+        save_figure(plot_plan_world(result), plot, (result.plan.system.name,))
     if animate is not None:
+        import matplotlib
+
         from nilpotent.viz.plan_world import animate_plan_world
 
-        with write_atomically(animate) as tmp:
+        # no mathtext: a model name such as $\frac{a}$ stays literal
+        with write_atomically(animate) as tmp, matplotlib.rc_context({"text.parse_math": False}):
             animate_plan_world(result, tmp, animate.suffix.lower())
