@@ -27,7 +27,7 @@ from nilpotent.core.outline import Limits
 from nilpotent.errors import ModelError, PlanningError, WorldError
 from nilpotent.models import get_model
 from nilpotent.models.trident import TridentGeometry
-from nilpotent.planning.global_planner import json_safe, plan_global
+from nilpotent.planning.global_planner import plan_global, plan_json
 from nilpotent.planning.verify import Checker
 from nilpotent.planning.world import World, world_from_dict
 
@@ -341,10 +341,12 @@ def test_bad_limit_options(run_cli, text):
     assert status == 2 and "error" in json.loads(out)
 
 
-def test_json_safe_replaces_non_finite_numbers():
-    out = json_safe({"a": [1.0, math.nan], "iterations": [{"distance": math.inf}]})
+def test_plan_json_replaces_non_finite_numbers_and_says_why():
+    out = plan_json({"a": [1.0, math.nan], "iterations": [{"distance": math.inf}],
+                     "clearance": None}, {"clearance": "no world"})
     assert out["a"] == [1.0, None] and out["iterations"][0]["distance"] is None
-    assert "iterations[].distance" in out["null_reasons"]
+    assert "iterations[0].distance" in out["undefined"]["paths"]
+    assert out["null_reasons"] == {"clearance": "no world"}
     json.dumps(out, allow_nan=False)
 
 

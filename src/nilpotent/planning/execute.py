@@ -35,8 +35,8 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.global_planner import (
     MID_TOL,
     GlobalPlan,
-    json_safe,
     plan_global,
+    plan_json,
     steer_admissible,
 )
 from nilpotent.planning.simulation import simulate_path
@@ -115,7 +115,7 @@ class Execution:
                     "min_singular_margin": v.min_singular_margin,
                     "violations": list(violations)}
 
-        return json_safe({
+        return plan_json({
             "schema": "nilpotent/execution@1",
             "model": self.plan.plan.system.name,
             "coordinates": list(self.plan.plan.system.coordinate_names),

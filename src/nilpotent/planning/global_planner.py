@@ -52,8 +52,9 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
+from nilpotent.strict_json import json_safe
 
-__all__ = ["GlobalPlan", "Piece", "json_safe", "ompl_path", "plan_global"]
+__all__ = ["GlobalPlan", "Piece", "ompl_path", "plan_global", "plan_json", "steer_admissible"]
 
 #: Largest tolerance at intermediate waypoints (the next piece starts from the state reached).
 MID_TOL = 0.05
@@ -168,48 +169,24 @@ class GlobalPlan:
         })
         if self.world is not None:
             out["world_definition"] = self.world.to_json()
-        return json_safe(out, reasons)
+        return plan_json(out, reasons)
 
 
-def json_safe(obj: Any, reasons: dict[str, str] | None = None) -> Any:
-    """``obj`` with every non-finite float replaced by ``None`` (recursively).
-
-    ``reasons`` (field → why it is null) is added as ``null_reasons`` to a
-    top-level dict, together with a reason for each replaced value's path.
-    """
-    found: dict[str, str] = dict(reasons or {})
-
-    def walk(x: Any, path: str) -> Any:
-        if isinstance(x, float) and not math.isfinite(x):
-            found.setdefault(path, f"{x!r}: not a finite number")
-            return None
-        if isinstance(x, np.floating):
-            return walk(float(x), path)
-        if isinstance(x, np.integer):
-            return int(x)
-        if isinstance(x, dict):
-            return {k: walk(v, f"{path}.{k}" if path else str(k)) for k, v in x.items()}
-        if isinstance(x, list | tuple):
-            return [walk(v, f"{path}[{i}]") for i, v in enumerate(x)]
-        return x
-
-    out = walk(obj, "")
-    if isinstance(out, dict) and found:
-        # one reason per array field is enough (e.g. iterations[k].distance of Newton steps)
-        compact: dict[str, str] = {}
-        for k, why in found.items():
-            key = k.split("[")[0] + ("[]" + k.split("]", 1)[1] if "[" in k else "")
-            compact.setdefault(key, why)
-        if "iterations[].distance" in compact:
-            compact["iterations[].distance"] = (
-                "Newton refinement steps do not compute the homogeneous distance"
-            )
-        if "iterations[].nilpotent_error" in compact:
-            compact["iterations[].nilpotent_error"] = (
-                "Newton refinement steps do not steer the nilpotent system"
-            )
-        out["null_reasons"] = compact
-    return out
+def plan_json(out: dict[str, Any], reasons: dict[str, str] | None = None) -> dict[str, Any]:
+    """``out`` made strict JSON (:func:`nilpotent.strict_json.json_safe`: non-finite
+    numbers become ``null``, listed under ``undefined``), with ``null_reasons`` saying why
+    the fields in ``reasons`` are ``null``."""
+    undefined: list[str] = []
+    clean = json_safe(out, undefined=undefined)
+    if undefined:
+        clean["undefined"] = {
+            "paths": undefined,
+            "why": "not finite numbers (NaN or infinity), hence null; e.g. Newton refinement "
+                   "steps compute no homogeneous distance",
+        }
+    if reasons:
+        clean["null_reasons"] = dict(reasons)
+    return clean
 
 
 def _box(
