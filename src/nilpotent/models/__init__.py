@@ -32,6 +32,7 @@ import sympy as sp
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
+from nilpotent.models.outlines import with_builtin_constraints
 from nilpotent.models.trailers import car_trailers
 from nilpotent.models.trident import (
     TridentGeometry,
@@ -235,6 +236,7 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                 f"model {spec!r} needs its argument: {info.usage} (e.g. {info.example_spec})"
             )
         system = info.build(_parse_argument(spec, info, arg))
+    system = with_builtin_constraints(system)  # outline and default limits (planning)
     if params:
         system = system.with_parameters(dict(params))
     if info.positive_parameters:
