@@ -33,6 +33,9 @@ Expr = sp.Expr
 class ControlSystem:
     """A driftless control system given by its vector fields.
 
+    ``limits`` and ``geometry`` do not change the dynamics: they take no part
+    in equality and hashing (systems compare by their fields).
+
     Parameters
     ----------
     name:
@@ -52,9 +55,6 @@ class ControlSystem:
     geometry:
         The robot's outline for collision checks
         (:class:`~nilpotent.core.outline.Outline`), or ``None``.
-
-    ``limits`` and ``geometry`` do not change the dynamics: they take no part
-    in equality and hashing (systems compare by their fields).
 
     Raises
     ------
