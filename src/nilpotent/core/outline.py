@@ -36,6 +36,12 @@ Point2 = tuple[sp.Expr, sp.Expr]
 class Limits:
     """Closed intervals on coordinates: ``bounds`` is ``((name, lo, hi), ...)``.
 
+    Attributes
+    ----------
+    bounds:
+        ``(name, lo, hi)`` per limited coordinate: ``lo ≤ name ≤ hi`` (model
+        units, radians for angles).
+
     Raises
     ------
     ModelError
@@ -111,6 +117,11 @@ class Outline:
 
     The symbols are the model's coordinates and parameters (as
     ``sympy.Symbol(name)``).
+
+    Raises
+    ------
+    ModelError
+        A polygon with fewer than 3 points, or an empty outline.
     """
 
     polygons: tuple[tuple[Point2, ...], ...] = ()

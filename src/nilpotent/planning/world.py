@@ -58,6 +58,11 @@ class World:
         Obstacle polygons, each ``((x, y), ...)``.
     discs:
         Obstacle discs ``((cx, cy), radius)``.
+
+    Raises
+    ------
+    WorldError
+        An obstacle polygon that is not simple.
     """
 
     name: str
@@ -216,6 +221,15 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
 
 def load_world(path: str | Path) -> World:
     """Read a TOML world file (module doc).
+
+    Parameters
+    ----------
+    path : str or Path
+        The ``.toml`` file.
+
+    Returns
+    -------
+    World
 
     Raises
     ------
