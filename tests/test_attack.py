@@ -26,7 +26,8 @@ def _error(out: str) -> dict:
     return data["error"]
 
 
-@pytest.mark.parametrize("bracket", ["\u00b2,1", "1" * 5000 + ",1", "\u0661,\u0662", "9" * 40 + ",1"])
+@pytest.mark.parametrize(
+    "bracket", ["\u00b2,1", "1" * 5000 + ",1", "\u0661,\u0662", "9" * 40 + ",1"])
 def test_field_numbers_of_any_text_are_option_errors(run_cli, bracket):
     """Superscript or Arabic digits (str.isdigit is true, int() fails) and numbers past
     Python's 4300-digit limit were internal errors (exit 70)."""

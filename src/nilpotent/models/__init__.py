@@ -248,7 +248,9 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
 
 def _shown(text: str, limit: int = 200) -> str:
     clean = "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
-    return clean if len(clean) <= limit else clean[:limit] + f"... ({len(clean) - limit} more)"
+    if len(clean) <= limit:
+        return clean
+    return clean[:limit] + f"... ({len(clean) - limit} more characters)"
 
 
 def _file_problem(path: Path) -> str | None:

@@ -200,7 +200,7 @@ def load_generated_module(
     try:
         # run the text generated here, never a cached .pyc beside the file (one planted
         # in __pycache__ would otherwise be imported in place of the checked source)
-        exec(compile(data, str(path), "exec", dont_inherit=True), module.__dict__)  # noqa: S102
+        exec(compile(data, str(path), "exec", dont_inherit=True), module.__dict__)
     except BaseException:
         sys.modules.pop(name, None)
         raise
