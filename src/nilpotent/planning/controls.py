@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from nilpotent.errors import OptionError
+from nilpotent.numeric.types import State
 
 
 def _floats(values: Sequence[float], what: str) -> tuple[float, ...]:
@@ -193,7 +194,7 @@ class Segment:
         )
 
 
-def constant_segment(values: Sequence[float], duration: float = 1.0) -> Segment:
+def constant_segment(values: Sequence[float] | State, duration: float = 1.0) -> Segment:
     """A segment of constant inputs."""
     return Segment(duration, 2 * math.pi / duration, tuple(InputSignal(float(v)) for v in values))
 

@@ -48,6 +48,7 @@ import numpy as np
 from nilpotent.core.outline import Limits
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import IntegrationError, PlanningError, SingularPointError
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
 from nilpotent.planning.verify import Checker, Verification, verify_segments
@@ -344,8 +345,8 @@ def steer_admissible(
 
 def plan_global(
     system: ControlSystem,
-    start: Sequence[object],
-    goal: Sequence[object],
+    start: Sequence[object] | State,
+    goal: Sequence[object] | State,
     tol: float = 1e-8,
     *,
     world: World | None = None,

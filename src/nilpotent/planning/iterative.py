@@ -37,6 +37,7 @@ import numpy as np
 
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NilpotentError, PlanningError, SingularPointError
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import (
     Segment,
     coefficients,
@@ -204,7 +205,7 @@ class Plan:
         return typeset.plan_display(self).html()
 
 
-def _as_floats(point: Sequence[object], n: int, what: str) -> np.ndarray:
+def _as_floats(point: Sequence[object] | State, n: int, what: str) -> np.ndarray:
     try:
         arr = np.array([float(v) for v in point], dtype=float)  # type: ignore[arg-type]
     except (TypeError, ValueError):
@@ -379,8 +380,8 @@ def _refine(
 
 def plan(
     sys: ControlSystem,
-    start: Sequence[object],
-    goal: Sequence[object],
+    start: Sequence[object] | State,
+    goal: Sequence[object] | State,
     tol: float = 1e-8,
     *,
     max_iterations: int = 30,

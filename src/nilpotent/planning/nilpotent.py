@@ -52,6 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nilpotent.errors import PlanningError
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import (
     InputSignal,
     Segment,
@@ -282,8 +283,8 @@ _NEGLIGIBLE_SCALE = 1e-100
 
 def steer_nilpotent(
     system: TriangularSystem,
-    y_start: Sequence[float],
-    y_goal: Sequence[float],
+    y_start: Sequence[float] | State,
+    y_goal: Sequence[float] | State,
     *,
     method: str = "auto",
     seed: int = 0,

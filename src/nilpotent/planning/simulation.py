@@ -19,6 +19,7 @@ from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import numba_available
 from nilpotent.numeric.inputs import HarmonicInputs
 from nilpotent.numeric.integrators import integrate, kernels_cached
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
 
@@ -71,7 +72,7 @@ def resolve_engine(engine: str, system: ControlSystem) -> str:
 
 def simulate_candidates(
     system: ControlSystem,
-    x0: Sequence[float],
+    x0: Sequence[float] | State,
     candidates: Sequence[Sequence[Segment]],
     engine: str = "auto",
 ) -> np.ndarray:
@@ -99,7 +100,7 @@ def simulate_candidates(
 
 def simulate_path(
     system: ControlSystem,
-    x0: Sequence[float],
+    x0: Sequence[float] | State,
     segments: Sequence[Segment],
     points_per_segment: int = 40,
     engine: str = "auto",
