@@ -41,6 +41,7 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NotBracketGeneratingError, PlanningError, SingularPointError
 from nilpotent.numeric.compile import CompiledSystem, compile_system
@@ -262,8 +263,8 @@ def _symbolic_model(system: ControlSystem, point: tuple[sp.Expr, ...]) -> LocalM
     names = tuple(approx.coordinates.names)
     tri = TriangularSystem.from_fields(approx.fields, names, tuple(filt.weights))
     params = {sp.Symbol(k): v for k, v in system.parameters}
-    fwd_exprs = [sp.S(e).xreplace(params) for e in approx.coordinates.forward]
-    inv_exprs = [sp.S(e).xreplace(params) for e in approx.coordinates.inverse]
+    fwd_exprs = [as_expr(e).xreplace(params) for e in approx.coordinates.forward]
+    inv_exprs = [as_expr(e).xreplace(params) for e in approx.coordinates.inverse]
     fwd = sp.lambdify([system.coordinates], fwd_exprs, "numpy")
     inv = sp.lambdify([names], inv_exprs, "numpy")
 
