@@ -34,7 +34,7 @@ def audit():
 
 
 def test_schema_and_entries(audit) -> None:
-    data = json.loads(json.dumps(audit.as_json()))
+    data = json.loads(json.dumps(audit.to_json()))
     assert data["schema"] == AUDIT_SCHEMA
     keys = {"id", "section", "statement", "paper", "computed", "verdict", "explanation"}
     ids = [e["id"] for e in data["entries"]]

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from nilpotent.cli.app import JsonOpt, app, cli_errors, emit_json, stderr_console, stdout_console
+from nilpotent.cli.app import JsonOpt, app, cli_errors, emit_json, stdout_console
 
 
 @app.command("reproduce")
@@ -30,27 +30,11 @@ def reproduce_command(
     json_out: JsonOpt = False,
 ) -> None:
     """Run the paper's pipeline end to end and write an offline page with the audit."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
     from nilpotent.report.pipeline import reproduce
 
-    console = stderr_console()
-    with Progress(
-        TextColumn("[bold]reproduce[/bold]"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total} {task.description}"),
-        TimeElapsedColumn(),
-        console=console,
-        transient=json_out,
-    ) as bar:
-        task = bar.add_task("starting", total=1)
-
-        def progress(step: str, done: int, total: int) -> None:
-            bar.update(task, description=step, completed=done, total=total)
-
-        result = reproduce(out, quick=quick, progress=progress)
+    result = reproduce(out, quick=quick)
     if json_out:
-        emit_json(result.summary())
+        emit_json(result.to_json())
         return
     audit = result.audit
     con = stdout_console()

@@ -68,7 +68,7 @@ class Audit:
                 return e
         raise KeyError(entry_id)
 
-    def as_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/audit@1`` object of ``INTERFACE.md`` (plus a summary)."""
         return {
             "schema": AUDIT_SCHEMA,
