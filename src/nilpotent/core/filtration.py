@@ -659,6 +659,13 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
     singular points (it may also contain regular points where another frame
     would be needed).  Needs a square frame, i.e. a bracket-generating system.
 
+    Parameters
+    ----------
+    sys : ControlSystem
+        The system (parameters are substituted).
+    filtration : Filtration or None
+        Whose frame words to use (default: ``analyze(sys)`` at the origin).
+
     Raises
     ------
     ComputationLimitError
