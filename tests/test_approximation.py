@@ -29,17 +29,6 @@ from polynomial_systems import (
     witt_dimension,
 )
 
-MODELS = [
-    "unicycle",
-    "heisenberg",
-    "engel",
-    "cartan",
-    "martinet",
-    "trident-snake",
-    "trident-snake-paper",
-    "car-trailers:2",
-]
-
 
 def independent_checks(sys: ControlSystem, a) -> None:
     """Re-derive the approximation's defining properties with plain sympy."""
@@ -66,9 +55,9 @@ def independent_checks(sys: ControlSystem, a) -> None:
 
 
 @pytest.mark.parametrize("method", ["auto", "algebraic", "exponential", "exponential-1"])
-@pytest.mark.parametrize("name", MODELS)
-def test_certificate_and_independent_checks(name, method):
-    sys = get_model(name)
+@pytest.mark.every_model
+def test_certificate_and_independent_checks(model, method):
+    sys = model
     a = approximate(sys, None, method)
     assert a.certificate.ok, a.certificate.failures()
     assert a.certificate.nilpotent_step == a.filtration.step
