@@ -7,7 +7,15 @@ from typing import Annotated
 
 import typer
 
-from nilpotent.cli.app import JsonOpt, app, cli_errors, emit_json, stdout_console
+from nilpotent.cli.app import (
+    JsonOpt,
+    app,
+    check_writable,
+    cli_errors,
+    emit_json,
+    literal,
+    stdout_console,
+)
 
 
 @app.command("reproduce")
@@ -32,16 +40,17 @@ def reproduce_command(
     """Run the paper's pipeline end to end and write an offline page with the audit."""
     from nilpotent.report.pipeline import reproduce
 
-    result = reproduce(out, quick=quick)
+    check_writable(out, "--out", folder=True)
+    result = reproduce(out, quick=quick)  # reports its steps through nilpotent.progress
     if json_out:
         emit_json(result.to_json())
         return
     audit = result.audit
     con = stdout_console()
-    con.print(f"wrote {result.index}")
+    con.print(f"wrote {literal(result.index, 400)}")
     con.print(
         f"audit: {len(audit.entries)} statements, {len(audit.agreeing)} agree, "
-        f"{len(audit.differing)} differ ({result.audit_path})"
+        f"{len(audit.differing)} differ ({literal(result.audit_path, 400)})"
     )
     for entry in audit.differing:
         con.print(f"  differs  {entry.id}: {entry.explanation}", highlight=False, markup=False)

@@ -8,22 +8,27 @@ from typing import Annotated
 import typer
 
 from nilpotent.cli.app import (
+    MAX_PERIODS,
     AtOpt,
     JsonOpt,
     ModelArg,
     ParamOpt,
     PlotOpt,
     app,
+    bounded_int,
     check_plot_path,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_int_pair,
     parse_point_option,
+    print_heading,
     save_figure,
     stdout_console,
+    work,
 )
-from nilpotent.errors import OptionError
+from nilpotent.errors import ComputationLimitError, OptionError
 
 BracketOpt = Annotated[
     str,
@@ -37,8 +42,12 @@ OmegaOpt = Annotated[
     float, typer.Option("--omega", metavar="W", help="Angular frequency ω of the loop (> 0).")
 ]
 PeriodsOpt = Annotated[
-    int, typer.Option("--periods", metavar="K", help="Number of whole periods (>= 1).")
+    int,
+    typer.Option("--periods", metavar="K",
+                 help=f"Number of whole periods (1 to {MAX_PERIODS}).",
+                 parser=bounded_int("--periods", 1, MAX_PERIODS)),
 ]
+
 def check_positive(value: float, option: str) -> float:
     if not (math.isfinite(value) and value > 0):
         raise OptionError(f"{option} must be a positive number, got {value}")
@@ -48,6 +57,8 @@ def check_positive(value: float, option: str) -> float:
 def check_periods(value: int) -> int:
     if value < 1:
         raise OptionError(f"--periods must be >= 1, got {value}")
+    if value > MAX_PERIODS:
+        raise ComputationLimitError(f"--periods {value:,} is above the limit {MAX_PERIODS:,}")
     return int(value)
 
 
@@ -56,8 +67,9 @@ def print_comparison(comp) -> None:
 
     console = stdout_console()
     i, j = comp.bracket
-    console.print(
-        f"[bold]{comp.system.name}[/bold]: bracket motion [X{i},X{j}], A = {comp.amplitude:g}, "
+    print_heading(
+        console, comp.system.name,
+        f": bracket motion [X{i},X{j}], A = {comp.amplitude:g}, "
         f"ω = {comp.omega:g}, {comp.periods} period(s); approximation in "
         f"{comp.approximation.coordinates.method} privileged coordinates"
     )
@@ -105,15 +117,16 @@ def simulate_command(
     system = load_model_option(model, param)
     pair = parse_int_pair(bracket, "--bracket", system.m)
     point = parse_point_option(at, system)
-    comp = compare_bracket_motion(
-        system, pair, amplitude, omega=omega, periods=periods, point=point
-    )
+    with work(f"simulate {system.name}"):
+        comp = compare_bracket_motion(
+            system, pair, amplitude, omega=omega, periods=periods, point=point
+        )
     if plot is not None:
         fig, _ = comp.plot()
-        save_figure(fig, plot)
+        save_figure(fig, plot, (system.name,))
     if json_out:
         emit_json(comp.to_json())
         return
     print_comparison(comp)
     if plot is not None:
-        stdout_console().print(f"figure written to {plot}")
+        stdout_console().print(f"figure written to {literal(plot)}")

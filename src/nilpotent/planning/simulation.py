@@ -120,7 +120,11 @@ def simulate_path(
         engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL, times=times,
     )
     if not sol.all_ok:
+        from nilpotent.numeric.integrators import Status
+
         raise IntegrationError(
-            f"simulating the plan of {system.name} failed (status {int(sol.status[0])})"
+            f"simulating the plan of {system.name!r} failed: "
+            f"{Status(int(sol.status[0])).message} (the controls drive the system where "
+            "it cannot be integrated; try a nearer goal, --anchor goal or fewer iterations)"
         )
     return np.array(sol.times), np.array(sol.samples[0])

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from nilpotent.errors import OptionError
+from nilpotent.outputs import temporary_prefix
 
 __all__ = ["check_target", "move_into_place", "write_csv", "write_json"]
 
@@ -53,10 +54,24 @@ def check_target(target: Path) -> None:
         )
 
 
-def move_into_place(tmp: Path, target: Path) -> None:
-    """Replace ``target`` by the finished folder ``tmp`` (two renames; the old one is removed)."""
+def move_into_place(tmp: Path, target: Path, existed: bool = True) -> None:
+    """Replace ``target`` by the finished folder ``tmp`` (two renames; the old one is removed).
+
+    Raises
+    ------
+    OptionError
+        ``target`` did not exist when the work started (``existed`` false) and
+        was created meanwhile by something else, or is no longer a previous
+        reproduction (:func:`check_target` again); it is left untouched.
+    """
+    if target.exists() and not existed:
+        raise OptionError(
+            f"--out {target} was created by something else while the reproduction ran; it is "
+            "left untouched (run again, or choose another folder)"
+        )
+    check_target(target)  # again: what is there now must still be a previous reproduction
     if target.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
+        old = Path(tempfile.mkdtemp(prefix=temporary_prefix(target, "old"), dir=target.parent))
         os.replace(target, old / target.name)
         os.replace(tmp, target)
         shutil.rmtree(old, ignore_errors=True)
@@ -65,8 +80,10 @@ def move_into_place(tmp: Path, target: Path) -> None:
 
 
 def write_json(path: Path, obj: Any) -> Path:
-    """Write ``obj`` as indented JSON (no NaN/Infinity); return ``path``."""
-    path.write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    """Write ``obj`` as JSON with the one strict encoder (:mod:`nilpotent.strict_json`)."""
+    from nilpotent.strict_json import json_text
+
+    path.write_text(json_text(obj), encoding="utf-8")
     return path
 
 

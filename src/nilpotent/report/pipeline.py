@@ -52,6 +52,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import sympy as sp
 
+from nilpotent.outputs import remove_stale_temporaries, temporary_prefix
 from nilpotent.progress import progress as report_progress
 from nilpotent.report.output import check_target, move_into_place, write_csv, write_json
 from nilpotent.report.reproduction_data import (
@@ -202,14 +203,16 @@ def reproduce(
     """
     target = Path(out_dir).resolve()
     check_target(target)
+    existed = target.exists()
+    remove_stale_temporaries(target)  # left by runs killed outright
     settings = QUICK if quick else FULL
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp.", dir=target.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=temporary_prefix(target), dir=target.parent))
     mask = os.umask(0)
     os.umask(mask)
     os.chmod(tmp, 0o777 & ~mask)  # mkdtemp makes it private; the result is an ordinary folder
     try:
         result = _run(tmp, settings, quick, progress)
-        move_into_place(tmp, target)
+        move_into_place(tmp, target, existed)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
