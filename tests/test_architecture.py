@@ -21,7 +21,7 @@ PACKAGE = Path(nilpotent.__file__).parent
 
 #: Bottom to top.  Names on one line form one layer.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "progress"),
+    ("errors", "progress", "outputs", "strict_json"),
     ("core",),
     ("numeric",),
     ("models",),
@@ -75,6 +75,7 @@ def test_every_unit_is_placed_in_a_layer():
 @pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_imports_point_downward(path: Path):
     own = _unit(path)
+    assert own in RANK, f"{own} is in no layer"
     upward = [
         f"line {line}: {own} imports {unit}"
         for unit, line in sorted(_imported_units(path))
