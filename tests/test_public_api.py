@@ -144,3 +144,30 @@ def test_every_public_class_and_function_has_a_docstring(name):
     obj = getattr(nilpotent, name)
     if callable(obj):
         assert inspect.getdoc(obj), f"nilpotent.{name} has no docstring"
+
+
+# --- names follow docs/conventions.md ------------------------------------------------------
+
+#: Names the convention replaces, with the conventional one.
+_NOT_CONVENTIONAL = {
+    "system": "sys",
+    "timepts": "times",
+    "t_eval": "times",
+    "initial_state": "x0",
+    "x_0": "x0",
+    "p": "point",
+}
+
+
+@pytest.mark.parametrize("name", _public_functions())
+def test_parameter_names_follow_the_convention(name):
+    func = getattr(nilpotent, name)
+    params = inspect.signature(func).parameters
+    hints = {k: str(v.annotation) for k, v in params.items()}
+    for pname, hint in hints.items():
+        if "ControlSystem" in hint and "CompiledSystem" not in hint:
+            assert pname == "sys", f"nilpotent.{name}: a ControlSystem argument is named 'sys'"
+        if pname in _NOT_CONVENTIONAL and "ControlSystem" in hint:
+            pytest.fail(f"nilpotent.{name}({pname}): write {_NOT_CONVENTIONAL[pname]}")
+        if pname in ("timepts", "t_eval", "initial_state", "x_0", "p"):
+            pytest.fail(f"nilpotent.{name}({pname}): write {_NOT_CONVENTIONAL[pname]}")
