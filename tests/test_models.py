@@ -7,6 +7,7 @@ span the k-th layer), not with ``nilpotent.core.filtration``.
 
 from __future__ import annotations
 
+import json
 import random
 
 import pytest
@@ -287,3 +288,28 @@ def test_every_model_and_parameter_is_documented():
         assert f"`{info.usage}`" in text
         for name in info.parameters:
             assert name in text
+
+
+def test_the_registry_builds_nothing_at_import():
+    """Descriptions are read lazily: importing the registry builds no model."""
+    import subprocess
+    import sys
+
+    code = (
+        "from nilpotent.models import MODELS\n"
+        "print(sum('example' in info.__dict__ for info in MODELS.values()))\n"
+        "MODELS['unicycle'].description\n"
+        "print(sum('example' in info.__dict__ for info in MODELS.values()))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["0", "1"]
+
+
+def test_models_json_is_built_by_the_registry():
+    from nilpotent.models import MODELS_SCHEMA, models_to_json
+
+    data = json.loads(json.dumps(models_to_json()))
+    assert data["schema"] == MODELS_SCHEMA == "nilpotent/models@1"
+    assert [m["name"] for m in data["models"]] == [i.usage for i in MODELS.values()]
+    for entry in data["models"]:
+        assert set(entry) == {"name", "example", "description", "parameters", "parameter_rule"}
