@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 from nilpotent.core.system import ControlSystem as ControlSystem
 from nilpotent.errors import NilpotentError as NilpotentError
+from nilpotent.version import __version__ as __version__
 
 if TYPE_CHECKING:
     from nilpotent.core.approximation import Certificate as Certificate
@@ -75,8 +76,6 @@ if TYPE_CHECKING:
     from nilpotent.simulate import scaling_study as scaling_study
     from nilpotent.sweep import SweepResult as SweepResult
     from nilpotent.sweep import amplitude_range as amplitude_range
-
-__version__ = "0.1.0"
 
 __all__ = [
     "MODELS",

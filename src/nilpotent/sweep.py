@@ -703,9 +703,9 @@ def _ball(rng: np.random.Generator, count: int, n: int, radius: float) -> np.nda
 def _versions(backend: str) -> dict[str, str]:
     from importlib import metadata
 
-    import nilpotent
+    from nilpotent.version import __version__
 
-    out = {"python": sys.version.split()[0], "nilpotent": nilpotent.__version__}
+    out = {"python": sys.version.split()[0], "nilpotent": __version__}
     names = ["numpy", "sympy", "symengine", "numba"]
     if backend == "dask":
         names += ["dask", "distributed"]
