@@ -37,6 +37,22 @@ RANK = {name: k for k, names in enumerate(LAYERS) for name in names}
 #: The largest module the codebase accepts (lines).
 MAX_LINES = 700
 
+#: Known exceptions still to be removed, each with where it is tracked.  The tests
+#: fail for any exception not listed *and* for a listed one that is gone (so the
+#: list only shrinks).
+KNOWN_OVERSIZE: dict[str, str] = {
+    "core/filtration.py": "issue 11: the rank engines move to core/spans.py",
+    "core/privileged.py": "issue 11: to split (coordinates / constructions)",
+    "simulate.py": "issue 11: replaced by simulation/",
+    "sweep.py": "issue 11: replaced by simulation/",
+}
+KNOWN_UPWARD: dict[tuple[str, str], str] = {
+    ("planning/plotting.py", "viz"): "issue 11: plan figures move to viz/",
+}
+KNOWN_COMMAND_IMPORTS: dict[tuple[str, str], str] = {
+    ("cmd_approximate.py", "cmd_analyze"): "issue 11: JSON from the results' to_json()",
+}
+
 
 def _modules() -> list[Path]:
     return sorted(PACKAGE.rglob("*.py"))
@@ -82,22 +98,32 @@ def test_imports_point_downward(path: Path):
         if unit in RANK and RANK[unit] > RANK[own]
     ]
     unknown = [unit for unit, _ in _imported_units(path) if unit not in RANK]
-    assert not upward, upward
+    rel = str(path.relative_to(PACKAGE))
+    known = {unit for (module, unit) in KNOWN_UPWARD if module == rel}
+    found = {u for u, _ in _imported_units(path) if u in RANK and RANK[u] > RANK[own]}
+    assert found == known, upward or f"{rel}: remove {sorted(known)} from KNOWN_UPWARD"
     assert not unknown, f"imports of modules that do not exist: {unknown}"
 
 
 @pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(PACKAGE)))
 def test_no_module_over_the_size_limit(path: Path):
     lines = len(path.read_text(encoding="utf-8").splitlines())
-    assert lines <= MAX_LINES, f"{path.name}: {lines} lines (split it by concept)"
+    rel = str(path.relative_to(PACKAGE))
+    if rel in KNOWN_OVERSIZE:
+        assert lines > MAX_LINES, f"{rel} is {lines} lines now: remove it from KNOWN_OVERSIZE"
+    else:
+        assert lines <= MAX_LINES, f"{rel}: {lines} lines (split it by concept)"
 
 
 def test_commands_do_not_import_each_other():
+    found = set()
     for path in sorted((PACKAGE / "cli").glob("cmd_*.py")):
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
             if isinstance(node, ast.ImportFrom):
                 module = ("." * node.level) + (node.module or "")
-                assert "cmd_" not in module, f"{path.name} imports {module}"
+                if "cmd_" in module:
+                    found.add((path.name, module.rsplit(".", 1)[-1]))
+    assert found == set(KNOWN_COMMAND_IMPORTS), f"commands importing commands: {sorted(found)}"
 
 
 def test_core_loads_neither_matplotlib_nor_scipy():
