@@ -51,6 +51,7 @@ KNOWN_UPWARD: dict[tuple[str, str], str] = {
 }
 KNOWN_COMMAND_IMPORTS: dict[tuple[str, str], str] = {
     ("cmd_approximate.py", "cmd_analyze"): "issue 11: JSON from the results' to_json()",
+    ("cmd_scaling.py", "cmd_simulate"): "issue 11: shared options in cli/",
 }
 
 
