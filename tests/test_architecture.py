@@ -41,7 +41,6 @@ MAX_LINES = 700
 #: fail for any exception not listed *and* for a listed one that is gone (so the
 #: list only shrinks).
 KNOWN_OVERSIZE: dict[str, str] = {
-    "core/filtration.py": "issue 11: the rank engines move to core/spans.py",
     "core/privileged.py": "issue 11: to split (coordinates / constructions)",
     "simulate.py": "issue 11: replaced by simulation/",
     "sweep.py": "issue 11: replaced by simulation/",
@@ -50,7 +49,6 @@ KNOWN_UPWARD: dict[tuple[str, str], str] = {
     ("planning/plotting.py", "viz"): "issue 11: plan figures move to viz/",
 }
 KNOWN_COMMAND_IMPORTS: dict[tuple[str, str], str] = {
-    ("cmd_approximate.py", "cmd_analyze"): "issue 11: JSON from the results' to_json()",
     ("cmd_scaling.py", "cmd_simulate"): "issue 11: shared options in cli/",
 }
 

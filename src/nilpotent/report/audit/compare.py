@@ -161,12 +161,13 @@ def push_forward(
 
 
 def numeric_rank(vectors: Sequence[Sequence[sp.Expr]]) -> int:
-    """Rank of exact algebraic vectors, evaluated with 30 digits (pivots below 1e-18 are 0).
+    """Rank of exact vectors (the span of brackets at the origin) by the one rank engine.
 
-    The audit's one rank computation (the span of brackets at the origin).
+    :func:`nilpotent.core.spans.rank` (certified; a random point for symbolic entries).
     """
-    rows = [[sp.N(sp.S(v), _DIGITS) for v in vec] for vec in vectors]
-    return sp.Matrix(rows).rank(iszerofunc=lambda v: abs(v) < sp.Float("1e-18"))
+    from nilpotent.core.spans import rank  # the one rank engine
+
+    return rank(vectors, probabilistic=True)[0]
 
 
 def matrix_text(m: sp.Matrix) -> str:
