@@ -47,6 +47,8 @@ if TYPE_CHECKING:
     from nilpotent.core.modelfile import load_model_file as load_model_file
     from nilpotent.core.modelfile import system_from_dict as system_from_dict
     from nilpotent.core.orders import function_order as function_order
+    from nilpotent.core.outline import Limits as Limits
+    from nilpotent.core.outline import Outline as Outline
     from nilpotent.core.points import parse_point as parse_point
     from nilpotent.core.privileged import PrivilegedCoordinates as PrivilegedCoordinates
     from nilpotent.core.privileged import privileged_coordinates as privileged_coordinates
@@ -63,6 +65,11 @@ if TYPE_CHECKING:
     from nilpotent.planning import Plan as Plan
     from nilpotent.planning import plan as plan
     from nilpotent.planning import steer_nilpotent as steer_nilpotent
+    from nilpotent.planning.execute import execute_plan as execute_plan
+    from nilpotent.planning.global_planner import GlobalPlan as GlobalPlan
+    from nilpotent.planning.global_planner import plan_global as plan_global
+    from nilpotent.planning.world import World as World
+    from nilpotent.planning.world import load_world as load_world
     from nilpotent.report import Audit as Audit
     from nilpotent.report import Reproduction as Reproduction
     from nilpotent.report import reproduce as reproduce
@@ -84,9 +91,12 @@ __all__ = [
     "Comparison",
     "ControlSystem",
     "Filtration",
+    "GlobalPlan",
+    "Limits",
     "ModelInfo",
     "NilpotentApproximation",
     "NilpotentError",
+    "Outline",
     "Plan",
     "PrivilegedCoordinates",
     "Reproduction",
@@ -95,6 +105,7 @@ __all__ = [
     "SweepResult",
     "Trajectory",
     "TridentGeometry",
+    "World",
     "__version__",
     "amplitude_range",
     "analyze",
@@ -104,6 +115,7 @@ __all__ = [
     "compare_bracket_motion",
     "compile_fields",
     "compile_system",
+    "execute_plan",
     "format_expression",
     "format_word",
     "function_order",
@@ -113,9 +125,11 @@ __all__ = [
     "list_models",
     "load_model_file",
     "load_system",
+    "load_world",
     "parse_expression",
     "parse_point",
     "plan",
+    "plan_global",
     "privileged_coordinates",
     "reproduce",
     "run_audit",

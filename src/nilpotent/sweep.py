@@ -943,6 +943,10 @@ def sweep(
                     raise OptionError(
                         f"cannot reach the Dask scheduler at {dask!r}: {exc}"
                     ) from None
+                except MemoryError:  # something answered, but not a Dask scheduler
+                    raise OptionError(
+                        f"the server at {dask!r} did not answer as a Dask scheduler"
+                    ) from None
             own_client = True
         else:
             client = dask

@@ -7,6 +7,7 @@ from typing import Annotated
 import typer
 
 from nilpotent.cli.app import (
+    MAX_SCALING_AMPLITUDES,
     AtOpt,
     JsonOpt,
     ModelArg,
@@ -33,7 +34,7 @@ from nilpotent.cli.cmd_simulate import (
     check_periods,
     check_positive,
 )
-from nilpotent.errors import OptionError
+from nilpotent.errors import ComputationLimitError, OptionError
 
 
 def print_scaling(study) -> None:
@@ -90,6 +91,11 @@ def scaling_command(
         if amplitudes is None
         else parse_float_list(amplitudes, "--amplitudes")
     )
+    if len(amps) > MAX_SCALING_AMPLITUDES:
+        raise ComputationLimitError(
+            f"--amplitudes: {len(amps):,} amplitudes, above the limit {MAX_SCALING_AMPLITUDES:,} "
+            "of a scaling study (one simulation each); use fewer amplitudes, or `nilpotent "
+            "sweep` for large studies")
     for a in amps:
         check_positive(a, "--amplitudes")
     if len(set(amps)) < 2:
