@@ -331,7 +331,15 @@ def compile_fields(
 
 
 def compile_system(system: Any, *, backend: str = "auto") -> CompiledSystem:
-    """Compile a :class:`~nilpotent.core.system.ControlSystem` (parameters substituted)."""
+    """Compile a :class:`~nilpotent.core.system.ControlSystem` (parameters substituted).
+
+    Parameters
+    ----------
+    system : ControlSystem
+        The system (or anything with ``coordinates``, ``fields`` and parameters).
+    backend : str
+        As in :func:`compile_fields`.
+    """
     return compile_fields(
         system.coordinates,
         system.specialized_fields,
