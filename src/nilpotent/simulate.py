@@ -183,6 +183,19 @@ def bracket_signal(
     ``i``, ``j``: 1-based, different, at most ``m``; ``periods`` whole periods
     (duration $2\pi K/\omega$).  Over each period it moves a system by
     $\pi A^2 [X_i, X_j](p) + O(A^3)$.
+
+    Parameters
+    ----------
+    m : int
+        Number of inputs.
+    i, j : int
+        The bracket's inputs, 1-based, different, at most ``m``.
+    amplitude : float
+        $A$.
+    omega : float
+        $\omega$ (rad/s).
+    periods : int
+        Whole periods $K$.
     """
     _check_bracket(m, (i, j))
     if not (math.isfinite(amplitude) and amplitude > 0):
@@ -848,6 +861,15 @@ def scaling_study(
 
     Parameters are those of :func:`compare_bracket_motion`; ``amplitudes``
     must be positive and contain at least two different values.
+
+    Parameters
+    ----------
+    sys, bracket, omega, periods, point : see :func:`compare_bracket_motion`
+        The system, the bracket ``(i, j)`` and the input's frequency, periods, start.
+    approximation, samples, rtol, atol, engine : see :func:`compare_bracket_motion`
+        The approximation to compare with, samples per run, tolerances, engine.
+    amplitudes : sequence of float
+        Positive amplitudes, at least two different values.
     """
     amps = np.asarray([float(a) for a in amplitudes])
     if amps.size < 2 or np.unique(amps).size < 2:

@@ -53,7 +53,7 @@ def format_word(w: Word) -> str:
     Parameters
     ----------
     w : Word
-        A generator index (from 1) or a pair ``(u, v)`` meaning $[u, v]$.
+        A generator ``i`` (1-based) or a pair of words.
 
     Examples
     --------
@@ -154,6 +154,13 @@ def hall_basis(m: int, max_length: int) -> tuple[Word, ...]:
     length $k$ (Witt's formula).  Example for ``m = 2`` up to length 3:
     ``X1, X2, [X1,X2], [X1,[X1,X2]], [X2,[X1,X2]]``.
 
+    Parameters
+    ----------
+    m : int
+        Number of generators (fields).
+    max_length : int
+        Longest word returned.
+
     Examples
     --------
     >>> [format_word(w) for w in hall_basis(2, 4)][3:]
@@ -210,15 +217,10 @@ def bracket(
 
     Parameters
     ----------
-    X, Y : sequence of sympy expressions, length n
-        The components of the two fields along ``coords``.
-    coords : sequence of sympy symbols, length n
-        The coordinates the components are functions of.
-
-    Returns
-    -------
-    tuple of sympy expressions, length n
-        The components of $[X, Y]$.
+    X, Y : sequence of sympy expressions
+        The two fields' components, shape ``(n,)``, in the order of ``coords``.
+    coords : sequence of sympy symbols
+        The coordinates, shape ``(n,)``.
 
     Examples
     --------
@@ -374,15 +376,9 @@ def word_field(sys: ControlSystem, word: Word) -> tuple[sp.Expr, ...]:
     Parameters
     ----------
     sys : ControlSystem
-        The system whose fields $X_1, \\dots, X_m$ the word brackets.
+        The system whose fields ``X1..Xm`` the word names.
     word : Word
-        A generator index $i$ (the field $X_i$, from 1) or a pair ``(u, v)``
-        meaning $[u, v]$.
-
-    Returns
-    -------
-    tuple of sympy expressions, length n
-        The components of the bracket along ``sys.coordinates``.
+        A generator ``i`` (1-based) or a pair of words.
 
     Examples
     --------

@@ -616,14 +616,9 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
     Parameters
     ----------
     sys : ControlSystem
-        The system (parameters substituted).
-    filtration : Filtration, optional
+        The system (parameters are substituted).
+    filtration : Filtration or None
         Whose frame words to use (default: ``analyze(sys)`` at the origin).
-
-    Returns
-    -------
-    sympy expression
-        $\\det(Y_1, \\dots, Y_n)$ as a function of the coordinates.
 
     Raises
     ------

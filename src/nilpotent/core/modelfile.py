@@ -497,7 +497,7 @@ def load_model_file(path: str | Path) -> ControlSystem:
     Parameters
     ----------
     path : str or Path
-        The file; its suffix (``.toml`` or ``.json``) says how to read it.
+        The model file (format: ``INTERFACE.md``).
 
     Raises
     ------

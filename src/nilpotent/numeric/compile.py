@@ -346,10 +346,9 @@ def compile_system(system: Any, *, backend: str = "auto") -> CompiledSystem:
     Parameters
     ----------
     system : ControlSystem
-        The system; its parameter values are substituted.
+        The system (or anything with ``coordinates``, ``fields`` and parameters).
     backend : str
-        One of :data:`BACKENDS` (see :func:`compile_fields`, which raises on
-        bad input).
+        As in :func:`compile_fields`.
     """
     return compile_fields(
         system.coordinates,

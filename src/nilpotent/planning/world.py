@@ -58,11 +58,6 @@ class World:
         Obstacle polygons, each ``((x, y), ...)``.
     discs:
         Obstacle discs ``((cx, cy), radius)``.
-
-    Raises
-    ------
-    WorldError
-        An obstacle polygon that is not simple.
     """
 
     name: str
@@ -225,11 +220,7 @@ def load_world(path: str | Path) -> World:
     Parameters
     ----------
     path : str or Path
-        The ``.toml`` file.
-
-    Returns
-    -------
-    World
+        The world file (TOML).
 
     Raises
     ------
