@@ -112,6 +112,13 @@ class GlobalPlan:
         ``"direct"`` (one nilpotent plan, no global path needed) or ``"global"``.
     planner_seconds:
         Time spent in OMPL.
+    time_limit:
+        The wall-clock budget the planning was given (seconds; ``inf``: none).
+    seconds:
+        Wall-clock time of the whole planning.
+    clearance_required:
+        The distance robot–obstacles the motion had to exceed (``clearance`` of
+        :func:`plan_global`; model length units).
     """
 
     plan: Plan

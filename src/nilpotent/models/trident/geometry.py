@@ -86,6 +86,11 @@ class TridentGeometry:
         the legs with ``(−2π/3, 0, 2π/3)`` (:meth:`for_form`); the body is the
         same triangle, only the legs' numbering differs.
 
+    Raises
+    ------
+    ModelError
+        Non-positive ``r`` or ``l``, or not three offsets.
+
     Examples
     --------
     >>> g = TridentGeometry()
@@ -287,6 +292,13 @@ def wheel_slip(
     Returns
     -------
     WheelSlip
+
+    Raises
+    ------
+    OptionError
+        A trajectory that is not ``(T, 6)`` with ``(T,)`` times, velocities of
+        another shape, fewer than 3 samples, or times that do not increase
+        strictly.
 
     Examples
     --------
