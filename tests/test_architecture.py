@@ -50,7 +50,6 @@ KNOWN_UPWARD: dict[tuple[str, str], str] = {
 }
 KNOWN_COMMAND_IMPORTS: dict[tuple[str, str], str] = {
     ("cmd_scaling.py", "cmd_simulate"): "issue 11: shared options in cli/",
-    ("cmd_execute.py", "cmd_plan"): "issue 12's command: shared plan output to move to cli/",
 }
 
 
