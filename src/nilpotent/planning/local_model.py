@@ -83,7 +83,7 @@ class LocalModel:
 def _rank(mat: np.ndarray) -> int:
     from nilpotent.core.spans import numeric_rank  # the one rank engine (scale-invariant)
 
-    return numeric_rank(mat.T, RANK_TOL) if mat.size else 0
+    return numeric_rank(mat.T.tolist(), RANK_TOL) if mat.size else 0
 
 
 def _values(compiled: CompiledSystem, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
