@@ -28,7 +28,7 @@ Plots are :class:`matplotlib.figure.Figure` objects built without pyplot
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -39,248 +39,19 @@ from nilpotent.core.points import format_point
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.compile import CompiledSystem, compile_fields, compile_system
-from nilpotent.numeric.inputs import HarmonicInputs
 from nilpotent.numeric.integrators import (
     Status,
     integrate,
     solve_function_input,
 )
-
-# --- inputs ------------------------------------------------------------------------
-
-
-def _float_array(values: Any, shape_name: str) -> np.ndarray:
-    arr = np.asarray(values, dtype=float)
-    if not np.all(np.isfinite(arr)):
-        raise OptionError(f"{shape_name}: values must be finite numbers")
-    arr = np.array(arr)
-    arr.setflags(write=False)
-    return arr
-
-
-@dataclass(frozen=True, eq=False)
-class Signal:
-    r"""Piecewise sums of sinusoids, one segment after another from ``t = 0``.
-
-    On segment ``s`` (local time $\tau$ from 0 to ``durations[s]``):
-    $u_i = a_{s,i} + \sum_{k=1}^{K} b_{s,i,k}\cos(k\omega_s\tau) + c_{s,i,k}\sin(k\omega_s\tau)$.
-
-    Attributes
-    ----------
-    durations, omegas:
-        ``(S,)`` segment durations (> 0) and base angular frequencies.
-    constant:
-        ``(S, m)`` the $a$.
-    cos, sin:
-        ``(S, m, K)`` the $b$ and $c$ (``K`` may be 0).
-    """
-
-    durations: np.ndarray
-    omegas: np.ndarray
-    constant: np.ndarray
-    cos: np.ndarray
-    sin: np.ndarray
-
-    def __post_init__(self) -> None:
-        d = _float_array(self.durations, "durations").reshape(-1)
-        w = _float_array(self.omegas, "omegas").reshape(-1)
-        a = _float_array(self.constant, "constant")
-        c = _float_array(self.cos, "cos")
-        s = _float_array(self.sin, "sin")
-        if a.ndim != 2 or a.shape[0] != d.size or w.shape != d.shape:
-            raise OptionError(
-                f"signal: constant must be (S, m) with S = {d.size} segments, got {a.shape}"
-            )
-        if c.shape != s.shape or c.ndim != 3 or c.shape[:2] != a.shape:
-            raise OptionError(f"signal: cos/sin must be (S, m, K), got {c.shape} and {s.shape}")
-        if d.size == 0 or np.any(d <= 0):
-            raise OptionError("signal: at least one segment, every duration > 0")
-        for name, arr in (("durations", d), ("omegas", w), ("constant", a), ("cos", c), ("sin", s)):
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-
-    @property
-    def m(self) -> int:
-        """Number of inputs."""
-        return int(self.constant.shape[1])
-
-    @property
-    def duration(self) -> float:
-        return float(self.durations.sum())
-
-    @property
-    def breakpoints(self) -> np.ndarray:
-        """``(S+1,)`` segment boundaries ``0 = t_0 < … < t_S``."""
-        return np.concatenate([[0.0], np.cumsum(self.durations)])
-
-    def to_inputs(self) -> HarmonicInputs:
-        """The signal as a batch of one for :func:`nilpotent.numeric.integrate`."""
-        return HarmonicInputs(
-            self.durations[None], self.omegas[None], self.constant[None],
-            self.cos[None], self.sin[None],
-        )
-
-    def evaluate(self, t: float) -> np.ndarray:
-        """``(m,)`` inputs at global time ``t``."""
-        return self.to_inputs().evaluate(float(t))[0]
-
-    def to_segments(self) -> list[dict[str, Any]]:
-        """The INTERFACE.md plan-segment form:
-        ``[{"duration", "omega", "inputs": [{"constant", "cos", "sin"}, ...]}, ...]``."""
-        out = []
-        for s in range(self.durations.size):
-            out.append({
-                "duration": float(self.durations[s]),
-                "omega": float(self.omegas[s]),
-                "inputs": [
-                    {
-                        "constant": float(self.constant[s, i]),
-                        "cos": [float(v) for v in self.cos[s, i]],
-                        "sin": [float(v) for v in self.sin[s, i]],
-                    }
-                    for i in range(self.m)
-                ],
-            })
-        return out
-
-
-@dataclass(frozen=True, eq=False)
-class FunctionSignal:
-    """Inputs given by a Python function ``func(t) -> (m,)`` on ``[0, duration]``.
-
-    ``breakpoints`` (inside ``(0, duration)``) are times where ``func`` may
-    jump; integration restarts there.  Integrated by ``solve_ivp`` only.
-    """
-
-    func: Callable[[float], Any]
-    m: int
-    duration: float
-    breakpoints_inside: tuple[float, ...] = ()
-
-    def __post_init__(self) -> None:
-        if not callable(self.func):
-            raise OptionError("FunctionSignal needs a callable func(t)")
-        if not (math.isfinite(self.duration) and self.duration > 0):
-            raise OptionError(f"duration must be > 0, got {self.duration}")
-        inside = tuple(sorted(float(b) for b in self.breakpoints_inside))
-        if any(not 0 < b < self.duration for b in inside):
-            raise OptionError("breakpoints must lie strictly inside (0, duration)")
-        object.__setattr__(self, "breakpoints_inside", inside)
-
-    @property
-    def breakpoints(self) -> np.ndarray:
-        return np.array([0.0, *self.breakpoints_inside, float(self.duration)])
-
-    def evaluate(self, t: float) -> np.ndarray:
-        return np.asarray(self.func(float(t)), dtype=float).reshape(self.m)
-
-
-def bracket_signal(
-    m: int, i: int, j: int, amplitude: float, omega: float = 1.0, periods: int = 1
-) -> Signal:
-    r"""The periodic bracket input $u_i = -A\omega\sin\omega t$, $u_j = A\omega\cos\omega t$.
-
-    ``i``, ``j``: 1-based, different, at most ``m``; ``periods`` whole periods
-    (duration $2\pi K/\omega$).  Over each period it moves a system by
-    $\pi A^2 [X_i, X_j](p) + O(A^3)$.
-    """
-    _check_bracket(m, (i, j))
-    if not (math.isfinite(amplitude) and amplitude > 0):
-        raise OptionError(f"amplitude must be > 0, got {amplitude}")
-    if not (math.isfinite(omega) and omega > 0):
-        raise OptionError(f"omega must be > 0, got {omega}")
-    if int(periods) != periods or periods < 1:
-        raise OptionError(f"periods must be a positive integer, got {periods}")
-    cos = np.zeros((1, m, 1))
-    sin = np.zeros((1, m, 1))
-    sin[0, i - 1, 0] = -amplitude * omega
-    cos[0, j - 1, 0] = amplitude * omega
-    return Signal([2 * math.pi * periods / omega], [omega], np.zeros((1, m)), cos, sin)
-
-
-def sinusoids(
-    constant: Sequence[float],
-    cos: Sequence[Sequence[float]],
-    sin: Sequence[Sequence[float]],
-    omega: float,
-    duration: float,
-) -> Signal:
-    r"""One segment $u_i = a_i + \sum_k b_{ik}\cos k\omega t + c_{ik}\sin k\omega t$.
-
-    ``cos[i]`` and ``sin[i]`` may have different lengths per input (padded with 0).
-    """
-    m = len(constant)
-    if len(cos) != m or len(sin) != m:
-        raise OptionError("sinusoids: constant, cos and sin need one entry per input")
-    k = max([len(r) for r in cos] + [len(r) for r in sin] + [0])
-    bc = np.zeros((1, m, k))
-    bs = np.zeros((1, m, k))
-    for i in range(m):
-        bc[0, i, : len(cos[i])] = cos[i]
-        bs[0, i, : len(sin[i])] = sin[i]
-    return Signal([duration], [omega], np.asarray(constant, dtype=float)[None], bc, bs)
-
-
-def piecewise_constant(values: Any, durations: Sequence[float]) -> Signal:
-    """Inputs constant on each segment: ``values`` ``(S, m)``, ``durations`` ``(S,)``."""
-    vals = np.atleast_2d(np.asarray(values, dtype=float))
-    s, m = vals.shape
-    return Signal(durations, np.ones(s), vals, np.zeros((s, m, 0)), np.zeros((s, m, 0)))
-
-
-def signal_from_segments(segments: Sequence[Any]) -> Signal:
-    """A :class:`Signal` from plan segments (INTERFACE.md), as dicts or objects.
-
-    Each segment has ``duration``, ``omega`` and ``inputs``; each input has
-    ``constant``, ``cos`` (coefficients of ``cos kωt``, k = 1..) and ``sin``.
-    """
-
-    def get(obj: Any, name: str) -> Any:
-        if isinstance(obj, Mapping):
-            if name not in obj:
-                raise OptionError(f"plan segment: missing {name!r}")
-            return obj[name]
-        return getattr(obj, name)
-
-    segs = list(segments)
-    if not segs:
-        raise OptionError("a signal needs at least one segment")
-    m = len(get(segs[0], "inputs"))
-    k = 0
-    for seg in segs:
-        ins = get(seg, "inputs")
-        if len(ins) != m:
-            raise OptionError("plan segments must all have the same number of inputs")
-        for inp in ins:
-            k = max(k, len(get(inp, "cos")), len(get(inp, "sin")))
-    s_count = len(segs)
-    a = np.zeros((s_count, m))
-    bc = np.zeros((s_count, m, k))
-    bs = np.zeros((s_count, m, k))
-    for s, seg in enumerate(segs):
-        for i, inp in enumerate(get(seg, "inputs")):
-            a[s, i] = float(get(inp, "constant"))
-            cs = [float(v) for v in get(inp, "cos")]
-            ss = [float(v) for v in get(inp, "sin")]
-            bc[s, i, : len(cs)] = cs
-            bs[s, i, : len(ss)] = ss
-    return Signal(
-        [float(get(seg, "duration")) for seg in segs],
-        [float(get(seg, "omega")) for seg in segs],
-        a, bc, bs,
-    )
-
-
-def _check_bracket(m: int, bracket: Sequence[int]) -> tuple[int, int]:
-    if len(bracket) != 2:
-        raise OptionError(f"a bracket is a pair of field numbers I,J, got {bracket!r}")
-    i, j = (int(v) for v in bracket)
-    if not (1 <= i <= m and 1 <= j <= m):
-        raise OptionError(f"bracket {i},{j}: field numbers must be between 1 and {m}")
-    if i == j:
-        raise OptionError(f"bracket {i},{j}: the two fields must differ")
-    return i, j
-
+from nilpotent.numeric.signals import (
+    FunctionSignal,
+    Signal,
+    bracket_signal,
+    check_bracket,
+    piecewise_constant,
+    sinusoids,
+)
 
 # --- single trajectories -------------------------------------------------------------
 
@@ -397,7 +168,7 @@ def simulate(
         return Trajectory(compiled.name, compiled.coordinate_names, start, signal, times,
                           states, final, status, float(rtol), "adaptive", "scipy")
     sol = integrate(
-        compiled, start[None], signal.to_inputs(), method=method, engine=engine, times=times,
+        compiled, start[None], signal, method=method, engine=engine, times=times,
         rtol=rtol, atol=atol, steps=steps, bound=bound, max_steps=max_steps,
     )
     return Trajectory(
@@ -426,7 +197,7 @@ def bracket_value(
     r"""$[X_I, X_J](p)$ as floats (:func:`nilpotent.core.brackets.word_values_at`)."""
     from nilpotent.core.brackets import word_values_at
 
-    i, j = _check_bracket(system.m, bracket)
+    i, j = check_bracket(system.m, bracket)
     (values,) = word_values_at(system, [(i, j)], tuple(point))
     return np.array([float(v) for v in values])
 
@@ -459,7 +230,7 @@ def _simulate_pair(
     atol: float,
     engine: str,
 ) -> _Pair:
-    from nilpotent.numeric.inputs import bracket_inputs
+    from nilpotent.numeric.signals import bracket_inputs
 
     i, j = bracket
     inputs = bracket_inputs(system.m, i, j, amplitudes, omega=omega, periods=periods)
@@ -642,7 +413,7 @@ def _prepare_comparison(
     system: ControlSystem, bracket: Sequence[int], point: Any, approximation: Any
 ) -> tuple[ControlSystem, tuple[int, int], tuple[sp.Expr, ...], Any, np.ndarray]:
     sysp = system.specialized()
-    pair = _check_bracket(sysp.m, bracket)
+    pair = check_bracket(sysp.m, bracket)
     pt = sysp.point(point) if point is not None else sysp.origin()
     if approximation is None:
         from nilpotent.core.approximation import approximate
@@ -689,7 +460,7 @@ def compare_bracket_motion(
     engine:
         Integration engine (:data:`nilpotent.numeric.ENGINES`).
     """
-    bracket_signal(sys.m, *_check_bracket(sys.m, bracket), amplitude, omega, periods)
+    bracket_signal(sys.m, *check_bracket(sys.m, bracket), amplitude, omega, periods)
     sysp, pair_ij, pt, approx, p = _prepare_comparison(sys, bracket, point, approximation)
     pair = _simulate_pair(sysp, approx, p, pair_ij, np.array([float(amplitude)]), omega,
                           periods, samples, rtol, atol, engine)
@@ -840,7 +611,7 @@ def scaling_study(
     if not np.all(np.isfinite(amps)) or np.any(amps <= 0):
         raise OptionError("amplitudes must be > 0")
     for a in amps:
-        bracket_signal(sys.m, *_check_bracket(sys.m, bracket), float(a), omega, periods)
+        bracket_signal(sys.m, *check_bracket(sys.m, bracket), float(a), omega, periods)
     sysp, pair_ij, pt, approx, p = _prepare_comparison(sys, bracket, point, approximation)
     pair = _simulate_pair(sysp, approx, p, pair_ij, amps, omega, periods, samples, rtol, atol,
                           engine)
@@ -884,3 +655,15 @@ def _figure_axes(ax: Any) -> tuple[Any, Any]:
 
     fig = Figure(figsize=(6.4, 4.4), layout="constrained")
     return fig, fig.add_subplot(1, 1, 1)
+
+
+def signal_from_segments(segments: Sequence[Any]) -> Signal:
+    """A :class:`Signal` from plan segments (:meth:`Signal.from_segments`)."""
+    return Signal.from_segments(segments)
+
+
+__all__ = [
+    "Comparison", "FunctionSignal", "ScalingStudy", "Signal", "Trajectory", "bracket_signal",
+    "bracket_value", "compare_bracket_motion", "piecewise_constant", "scaling_study",
+    "signal_from_segments", "simulate", "sinusoids",
+]

@@ -61,8 +61,8 @@ import sympy as sp
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import MissingExtraError, OptionError, PointError
 from nilpotent.numeric.compile import CompiledSystem, compile_fields, compile_system
-from nilpotent.numeric.inputs import HarmonicInputs
 from nilpotent.numeric.integrators import METHODS, Status, integrate
+from nilpotent.numeric.signals import bracket_inputs
 
 __all__ = [
     "DEFAULT_AMPLITUDES",
@@ -568,25 +568,13 @@ def _apply_map(spec: _Fields, points: np.ndarray) -> np.ndarray:
     return values.reshape(*points.shape[:-1], values.shape[-1])
 
 
-def _bracket_batch(m: int, brackets: np.ndarray, amplitudes: np.ndarray,
-                   periods: int) -> HarmonicInputs:
-    """Bracket inputs with $\\omega = 1$, one per row (the pair may differ between rows)."""
-    b = amplitudes.size
-    rows = np.arange(b)
-    sin = np.zeros((b, 1, m, 1))
-    cos = np.zeros((b, 1, m, 1))
-    sin[rows, 0, brackets[:, 0] - 1, 0] = -amplitudes
-    cos[rows, 0, brackets[:, 1] - 1, 0] = amplitudes
-    return HarmonicInputs(np.full((b, 1), 2 * math.pi * periods), np.ones((b, 1)),
-                          np.zeros((b, 1, m)), cos, sin)
-
-
 def _run_chunk(chunk: _Chunk) -> dict[str, Any]:
     """Integrate one chunk of pairs; module-level so that Dask can ship it."""
     job = chunk.job
     original = _rebuild(job.original)
     approximation = _rebuild(job.approximation)
-    inputs = _bracket_batch(original.m, chunk.brackets, chunk.amplitudes, chunk.periods)
+    inputs = bracket_inputs(original.m, chunk.brackets[:, 0], chunk.brackets[:, 1],
+                            chunk.amplitudes, omega=1.0, periods=chunk.periods)
     times = np.linspace(0.0, 2 * math.pi * chunk.periods, chunk.time_samples)
     y0 = _apply_map(job.forward, chunk.starts)
     common = dict(method=chunk.method, engine=chunk.engine, times=times, rtol=chunk.rtol,

@@ -7,7 +7,7 @@ compiles with LLVM, several trajectories at once in SIMD lanes
 
 The right-hand side is built once per system, number of harmonics ``K`` and
 tolerance from the compiled fields (:attr:`CompiledSystem.fields`, via
-:func:`heyoka.from_sympy`) with the inputs of :class:`HarmonicInputs` as runtime
+:func:`heyoka.from_sympy`) with the inputs of :class:`Signal` as runtime
 parameters:
 
 .. math::
@@ -55,7 +55,7 @@ import sympy as sp
 
 from nilpotent.errors import MissingExtraError
 from nilpotent.numeric.compile import CompiledSystem
-from nilpotent.numeric.inputs import HarmonicInputs
+from nilpotent.numeric.signals import Signal
 
 #: How to install the optional dependency.
 INSTALL_HINT = 'pip install "heyoka>=7.13" (part of the default install of nilpotent)'
@@ -158,7 +158,7 @@ def taylor_integrator(system: CompiledSystem, harmonics: int, tol: float) -> Tay
     return memo[key]
 
 
-def _parameters(sig: HarmonicInputs) -> np.ndarray:
+def _parameters(sig: Signal) -> np.ndarray:
     """``(B, S, npar)`` runtime parameters of every segment (layout of the module docstring)."""
     b, s, m, k = sig.cos.shape
     per_input = np.empty((b, s, m, 1 + 2 * k))
@@ -174,7 +174,7 @@ def _parameters(sig: HarmonicInputs) -> np.ndarray:
 def run_heyoka(
     system: CompiledSystem,
     xs: np.ndarray,
-    sig: HarmonicInputs,
+    sig: Signal,
     ts: np.ndarray,
     *,
     rtol: float,
@@ -197,7 +197,7 @@ def run_heyoka(
     bs = integ.batch_size
     pars = _parameters(sig)
     ends = np.cumsum(sig.durations, axis=1)
-    segs = sig.segments
+    segs = sig.segment_count
     # per trajectory: the S segment ends and the T sample times, in time order
     evt_time = np.concatenate([ends, np.broadcast_to(ts, (batch, ts.size))], axis=1)
     evt_kind = np.broadcast_to(np.arange(segs + ts.size), evt_time.shape)

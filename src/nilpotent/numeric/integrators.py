@@ -45,7 +45,7 @@ import numpy as np
 
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import CompiledSystem, numba_available
-from nilpotent.numeric.inputs import HarmonicInputs
+from nilpotent.numeric.signals import Signal
 from nilpotent.numeric.tableaux import DOP853
 
 METHODS: dict[str, str] = {
@@ -158,7 +158,7 @@ class BatchSolution:
 def integrate(
     system: CompiledSystem,
     x0: Any,
-    inputs: HarmonicInputs,
+    inputs: Signal,
     *,
     method: str = "adaptive",
     engine: str = "auto",
@@ -272,7 +272,7 @@ def _numba_threads(threads: int | None) -> Iterator[None]:
 def _solve(
     system: CompiledSystem,
     xs: np.ndarray,
-    sig: HarmonicInputs,
+    sig: Signal,
     ts: np.ndarray,
     method: str,
     chosen: str,
@@ -369,7 +369,7 @@ def _choose_engine(system: CompiledSystem, method: str, engine: str, batch: int)
 def _run_numba(
     system: CompiledSystem,
     xs: np.ndarray,
-    sig: HarmonicInputs,
+    sig: Signal,
     ts: np.ndarray,
     adaptive: bool,
     steps: int,
@@ -396,7 +396,7 @@ def _run_numba(
 def _run_numpy(
     system: CompiledSystem,
     xs: np.ndarray,
-    sig: HarmonicInputs,
+    sig: Signal,
     ts: np.ndarray,
     steps: int,
     *,
@@ -563,7 +563,7 @@ def solve_function_input(
 def _run_scipy(
     system: CompiledSystem,
     xs: np.ndarray,
-    sig: HarmonicInputs,
+    sig: Signal,
     ts: np.ndarray,
     *,
     rtol: float,
@@ -578,12 +578,11 @@ def _run_scipy(
     samples = np.full((batch, ts.size, system.n), np.nan)
     info = np.zeros((batch, 4))
     for b in range(batch):
-        one = HarmonicInputs(sig.durations[b:b + 1], sig.omegas[b:b + 1],
-                             sig.constant[b:b + 1], sig.cos[b:b + 1], sig.sin[b:b + 1])
+        one = sig[b]
         bps = np.concatenate([[0.0], np.cumsum(one.durations[0])])
 
-        def u(t: float, one: HarmonicInputs = one) -> np.ndarray:
-            return one.evaluate(t)[0]
+        def u(t: float, one: Signal = one) -> np.ndarray:
+            return one.evaluate_batch(t)[0]
 
         f, smp, st, nfev = solve_function_input(
             system, xs[b], u, bps, times=ts, rtol=rtol, atol=atol,

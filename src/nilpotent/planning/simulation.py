@@ -1,7 +1,7 @@
 """Simulation of the true system under plan controls (through :mod:`nilpotent.numeric`).
 
 Segments (:class:`~nilpotent.planning.controls.Segment`) are converted to the
-numeric layer's :class:`~nilpotent.numeric.inputs.HarmonicInputs` (the same
+numeric layer's :class:`~nilpotent.numeric.signals.Signal` (``Signal.stack``; the same
 format: constant plus ``cos``/``sin`` harmonics, time restarting in every
 segment) and integrated with adaptive DOP853 at tight tolerances.  Several
 candidate controls from the same state are integrated as one batch.
@@ -17,36 +17,14 @@ import numpy as np
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import numba_available
-from nilpotent.numeric.inputs import HarmonicInputs
 from nilpotent.numeric.integrators import integrate, kernels_cached
+from nilpotent.numeric.signals import Signal
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
 
 #: Tolerances of the true-system integration (DOP853).
 RTOL = 1e-12
 ATOL = 1e-13
-
-
-def harmonic_inputs(batch: Sequence[Sequence[Segment]]) -> HarmonicInputs:
-    """Pack several control sequences (same number of segments) into ``HarmonicInputs``."""
-    b = len(batch)
-    s = len(batch[0])
-    m = batch[0][0].m
-    k = max((i.harmonics for segs in batch for seg in segs for i in seg.inputs), default=0)
-    durations = np.zeros((b, s))
-    omegas = np.zeros((b, s))
-    constant = np.zeros((b, s, m))
-    cos = np.zeros((b, s, m, k))
-    sin = np.zeros((b, s, m, k))
-    for bi, segs in enumerate(batch):
-        for si, seg in enumerate(segs):
-            durations[bi, si] = seg.duration
-            omegas[bi, si] = seg.omega
-            for i, sig in enumerate(seg.inputs):
-                constant[bi, si, i] = sig.constant
-                cos[bi, si, i, : len(sig.cos)] = sig.cos
-                sin[bi, si, i, : len(sig.sin)] = sig.sin
-    return HarmonicInputs(durations, omegas, constant, cos, sin)
 
 
 #: Integration engines: ``"numba"`` (compiled DOP853, about 1 ms per trajectory;
@@ -86,7 +64,7 @@ def simulate_candidates(
         if length == 0:
             out[idxs] = x
             continue
-        inputs = harmonic_inputs([candidates[i] for i in idxs])
+        inputs = Signal.stack([candidates[i] for i in idxs])
         sol = integrate(
             compiled, np.repeat(x[None, :], len(idxs), axis=0), inputs,
             engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL,
@@ -116,7 +94,7 @@ def simulate_path(
     )
     times = times[times <= starts[-1]]
     sol = integrate(
-        compiled_system(system), np.asarray(x0, dtype=float), harmonic_inputs([segments]),
+        compiled_system(system), np.asarray(x0, dtype=float), Signal.stack([segments]),
         engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL, times=times,
     )
     if not sol.all_ok:
