@@ -2,6 +2,7 @@
 
 * :func:`compile_fields` / :func:`compile_system` → :class:`CompiledSystem`
   (vectorised fields, right-hand side, Jacobians; numpy, numba or JAX);
+  :func:`compile_map` → :class:`CompiledMap` (coordinate changes y(x), x(y));
 * :class:`Signal` (the one control type: batches of piecewise sums of
   sinusoids, the plan-segment format), :func:`bracket_inputs`;
 * :func:`integrate` → :class:`BatchSolution` (adaptive or fixed-step DOP853,
@@ -9,8 +10,10 @@
 """
 
 from nilpotent.numeric.compile import BACKENDS as BACKENDS
+from nilpotent.numeric.compile import CompiledMap as CompiledMap
 from nilpotent.numeric.compile import CompiledSystem as CompiledSystem
 from nilpotent.numeric.compile import compile_fields as compile_fields
+from nilpotent.numeric.compile import compile_map as compile_map
 from nilpotent.numeric.compile import compile_system as compile_system
 from nilpotent.numeric.integrators import ENGINES as ENGINES
 from nilpotent.numeric.integrators import METHODS as METHODS
@@ -29,7 +32,7 @@ from nilpotent.numeric.tableaux import ButcherTableau as ButcherTableau
 
 __all__ = [
     "BACKENDS", "DOP853", "ENGINES", "METHODS", "TABLEAUX", "BatchSolution", "ButcherTableau",
-    "CompiledSystem", "FunctionSignal", "InputSignal", "Segment", "Signal", "Status",
+    "CompiledMap", "CompiledSystem", "FunctionSignal", "InputSignal", "Segment", "Signal", "Status",
     "bracket_inputs", "compile_fields",
-    "compile_system", "integrate", "solve_function_input",
+    "compile_map", "compile_system", "integrate", "solve_function_input",
 ]
