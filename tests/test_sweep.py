@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from nilpotent.core.approximation import approximate
 from nilpotent.errors import ExpressionError, MissingExtraError, OptionError
 from nilpotent.models import get_model
-from nilpotent.numeric.integrators import Status
+from nilpotent.numeric.integrate import Status
 from nilpotent.simulate import bracket_signal, compare_bracket_motion, simulate
 from nilpotent.sweep import amplitude_range, sweep
 

@@ -60,7 +60,7 @@ from nilpotent.numeric.signals import Signal
 #: How to install the optional dependency.
 INSTALL_HINT = 'pip install "heyoka>=7.13" (part of the default install of nilpotent)'
 
-# Status codes (the values of nilpotent.numeric.integrators.Status).
+# Status codes (the values of nilpotent.numeric.integrate.Status).
 _SUCCESS, _MAX_STEPS, _BLOW_UP, _NON_FINITE = 0, 1, 3, 4
 
 

@@ -46,6 +46,7 @@ from nilpotent.planning.controls import (
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
 from nilpotent.planning.simulation import resolve_engine, simulate_candidates, simulate_path
+from nilpotent.simulation.trajectory import Trajectory
 
 ANCHORS = ("current", "goal", "start")
 #: Relative finite-difference step of the shooting refinement's Jacobian.
@@ -93,14 +94,6 @@ class Iteration:
 
 
 @dataclass(frozen=True, eq=False)
-class Trajectory:
-    """Samples of the true system under the plan: ``times (N,)``, ``states (N, n)``."""
-
-    times: np.ndarray
-    states: np.ndarray
-
-
-@dataclass(frozen=True, eq=False)
 class Plan:
     """Controls steering a system from ``start`` to ``goal``, with what they reach.
 
@@ -120,7 +113,8 @@ class Plan:
     iterations:
         One :class:`Iteration` per nilpotent step.
     trajectory:
-        Samples of the true trajectory (for plots and animations).
+        The true system's :class:`~nilpotent.simulation.trajectory.Trajectory`
+        under ``segments`` (samples for plots and animations).
     tol:
         The tolerance asked for; ``converged`` says whether ``error ≤ tol``.
     anchor, builder:
@@ -522,7 +516,7 @@ def plan(
             failure = (
                 f"{failure}; the shooting refinement then went from {before:.3g} to {error:.3g}"
             )
-    times, states = simulate_path(system, x0, segments, trajectory_points, engine)
+    trajectory = simulate_path(system, x0, segments, trajectory_points, engine)
     result = Plan(
         system=system,
         start=tuple(float(v) for v in x0),
@@ -531,7 +525,7 @@ def plan(
         reached=tuple(float(v) for v in x),
         error=error,
         iterations=tuple(history),
-        trajectory=Trajectory(times, states),
+        trajectory=trajectory,
         tol=tol,
         anchor=anchor,
         builder=builder,

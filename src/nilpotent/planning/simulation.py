@@ -17,10 +17,11 @@ import numpy as np
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import numba_available
-from nilpotent.numeric.integrators import integrate, kernels_cached
+from nilpotent.numeric.integrate import Status, integrate, kernels_cached
 from nilpotent.numeric.signals import Signal
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
+from nilpotent.simulation.trajectory import Trajectory, simulate, stationary
 
 #: Tolerances of the true-system integration (DOP853).
 RTOL = 1e-12
@@ -81,11 +82,17 @@ def simulate_path(
     segments: Sequence[Segment],
     points_per_segment: int = 40,
     engine: str = "auto",
-) -> tuple[np.ndarray, np.ndarray]:
-    """``(times, states)`` of the true system under ``segments``, sampled in every segment."""
+) -> Trajectory:
+    """The true system's :class:`~nilpotent.simulation.trajectory.Trajectory` under
+    ``segments``, sampled ``points_per_segment`` times in every segment.
+
+    Raises
+    ------
+    IntegrationError
+        The integration stopped before the end of the controls.
+    """
     if not segments:
-        x = np.asarray(x0, dtype=float)
-        return np.zeros(1), x[None, :]
+        return stationary(compiled_system(system), x0)
     starts = np.concatenate([[0.0], np.cumsum([s.duration for s in segments])])
     times = np.unique(
         np.concatenate(
@@ -93,12 +100,12 @@ def simulate_path(
         )
     )
     times = times[times <= starts[-1]]
-    sol = integrate(
-        compiled_system(system), np.asarray(x0, dtype=float), Signal.stack([segments]),
-        engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL, times=times,
+    traj = simulate(
+        compiled_system(system), Signal.from_segments(segments), np.asarray(x0, dtype=float),
+        times=times, engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL,
     )
-    if not sol.all_ok:
+    if traj.status != Status.SUCCESS:
         raise IntegrationError(
-            f"simulating the plan of {system.name} failed (status {int(sol.status[0])})"
+            f"simulating the plan of {system.name} failed (status {int(traj.status)})"
         )
-    return np.array(sol.times), np.array(sol.samples[0])
+    return traj
