@@ -14,9 +14,9 @@ from nilpotent.numeric import (
     bracket_inputs,
     compile_fields,
     compile_system,
-    heyoka_engine,
     integrate,
 )
+from nilpotent.numeric.engines import heyoka_engine
 
 pytest.importorskip("heyoka")
 

@@ -6,7 +6,11 @@
 * :class:`Signal` (the one control type: batches of piecewise sums of
   sinusoids, the plan-segment format), :func:`bracket_inputs`;
 * :func:`integrate` → :class:`BatchSolution` (adaptive or fixed-step DOP853,
-  numba-parallel over the batch, with ``solve_ivp`` as the reference engine).
+  numba-parallel over the batch, heyoka's Taylor method, ``solve_ivp`` as the
+  reference) on the engines of :mod:`nilpotent.numeric.engines` (registry
+  :data:`ENGINES` of :class:`Engine` classes, the engine contract written there);
+* :mod:`~nilpotent.numeric.fits` (log–log slopes), :mod:`~nilpotent.numeric.types`
+  (shape aliases).
 """
 
 from nilpotent.numeric.compile import BACKENDS as BACKENDS
@@ -15,7 +19,8 @@ from nilpotent.numeric.compile import CompiledSystem as CompiledSystem
 from nilpotent.numeric.compile import compile_fields as compile_fields
 from nilpotent.numeric.compile import compile_map as compile_map
 from nilpotent.numeric.compile import compile_system as compile_system
-from nilpotent.numeric.integrate import ENGINES as ENGINES
+from nilpotent.numeric.engines import ENGINES as ENGINES
+from nilpotent.numeric.engines import Engine as Engine
 from nilpotent.numeric.integrate import METHODS as METHODS
 from nilpotent.numeric.integrate import BatchSolution as BatchSolution
 from nilpotent.numeric.integrate import Status as Status
@@ -31,8 +36,25 @@ from nilpotent.numeric.tableaux import TABLEAUX as TABLEAUX
 from nilpotent.numeric.tableaux import ButcherTableau as ButcherTableau
 
 __all__ = [
-    "BACKENDS", "DOP853", "ENGINES", "METHODS", "TABLEAUX", "BatchSolution", "ButcherTableau",
-    "CompiledMap", "CompiledSystem", "FunctionSignal", "InputSignal", "Segment", "Signal", "Status",
-    "bracket_inputs", "compile_fields",
-    "compile_map", "compile_system", "integrate", "solve_function_input",
+    "BACKENDS",
+    "DOP853",
+    "ENGINES",
+    "METHODS",
+    "TABLEAUX",
+    "BatchSolution",
+    "ButcherTableau",
+    "CompiledMap",
+    "CompiledSystem",
+    "Engine",
+    "FunctionSignal",
+    "InputSignal",
+    "Segment",
+    "Signal",
+    "Status",
+    "bracket_inputs",
+    "compile_fields",
+    "compile_map",
+    "compile_system",
+    "integrate",
+    "solve_function_input",
 ]

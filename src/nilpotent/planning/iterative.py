@@ -45,7 +45,7 @@ from nilpotent.planning.controls import (
 )
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
-from nilpotent.planning.simulation import resolve_engine, simulate_candidates, simulate_path
+from nilpotent.planning.simulation import simulate_candidates, simulate_path, single_engine
 from nilpotent.simulation.trajectory import Trajectory
 
 ANCHORS = ("current", "goal", "start")
@@ -409,7 +409,7 @@ def plan(
         Samples per segment of :attr:`Plan.trajectory`.
     engine:
         Integration engine of the true system
-        (:data:`nilpotent.planning.simulation.ENGINES`).
+        (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
     refine:
         When the nilpotent iterations stop short of ``tol`` (no progress or
         ``max_iterations``), finish with the shooting refinement of the last
@@ -461,7 +461,7 @@ def plan(
     initial_error = float(np.linalg.norm(x0 - xg))
     guess: list[Segment] = []  # first nilpotent step, if it made no progress
     if handover is None:
-        fast = refine and resolve_engine(engine, system) == "numba"
+        fast = refine and single_engine(engine, system) == "numba"
         high_step = choose_builder(system, x0) == "symbolic"  # step >= 3 near the start
         handover = HANDOVER if fast and high_step else 0.0
     elif not (handover >= 0 and math.isfinite(handover)):

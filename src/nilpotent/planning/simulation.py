@@ -15,9 +15,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import IntegrationError, OptionError
-from nilpotent.numeric.compile import numba_available
-from nilpotent.numeric.integrate import Status, integrate, kernels_cached
+from nilpotent.errors import IntegrationError
+from nilpotent.numeric.engines import choose_engine
+from nilpotent.numeric.integrate import Status, integrate
 from nilpotent.numeric.signals import Signal
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
@@ -28,24 +28,11 @@ RTOL = 1e-12
 ATOL = 1e-13
 
 
-#: Integration engines: ``"numba"`` (compiled DOP853, about 1 ms per trajectory;
-#: the first use of a model compiles its kernels, about 10 s, cached on disk),
-#: ``"scipy"`` (solve_ivp DOP853, no compilation, about 50 ms per segment),
-#: ``"auto"`` (numba when its kernels for the system are already cached, else
-#: scipy: one plan costs less than a compilation).
-ENGINES = ("auto", "numba", "scipy")
-
-
-def resolve_engine(engine: str, system: ControlSystem) -> str:
-    """The engine ``engine`` (one of :data:`ENGINES`) means for ``system``."""
-    if engine not in ENGINES:
-        raise OptionError(f"unknown engine {engine!r} (choose from {', '.join(ENGINES)})")
-    if engine == "numba" and not numba_available():
-        raise OptionError("the numba engine needs numba installed")
-    if engine == "auto":
-        cached = numba_available() and kernels_cached(compiled_system(system))
-        return "numba" if cached else "scipy"
-    return engine
+def single_engine(engine: str, system: ControlSystem) -> str:
+    """The engine (:mod:`nilpotent.numeric.engines`) that ``engine`` means for one trajectory
+    of ``system``: with ``"auto"``, numba when its kernels for the system are already
+    compiled, else scipy (one plan costs less than a compilation)."""
+    return choose_engine(compiled_system(system), "adaptive", engine, 1).name
 
 
 def simulate_candidates(
@@ -68,7 +55,7 @@ def simulate_candidates(
         inputs = Signal.stack([candidates[i] for i in idxs])
         sol = integrate(
             compiled, np.repeat(x[None, :], len(idxs), axis=0), inputs,
-            engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL,
+            engine=single_engine(engine, system), rtol=RTOL, atol=ATOL,
         )
         final = np.array(sol.final)
         final[~sol.ok] = np.nan
@@ -102,7 +89,7 @@ def simulate_path(
     times = times[times <= starts[-1]]
     traj = simulate(
         compiled_system(system), Signal.from_segments(segments), np.asarray(x0, dtype=float),
-        times=times, engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL,
+        times=times, engine=single_engine(engine, system), rtol=RTOL, atol=ATOL,
     )
     if traj.status != Status.SUCCESS:
         raise IntegrationError(
