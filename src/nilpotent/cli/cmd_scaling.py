@@ -23,14 +23,7 @@ from nilpotent.cli.app import (
     save_figure,
     stdout_console,
 )
-from nilpotent.cli.cmd_simulate import (
-    BracketOpt,
-    OmegaOpt,
-    PeriodsOpt,
-    check_periods,
-    check_positive,
-)
-from nilpotent.errors import OptionError
+from nilpotent.cli.bracket_options import BracketOpt, OmegaOpt, PeriodsOpt
 
 
 def print_scaling(study) -> None:
@@ -79,19 +72,13 @@ def scaling_command(
     json_out: JsonOpt = False,
 ) -> None:
     """Fit the log–log slope of the approximation error per weight group (expected w + 1)."""
-    from nilpotent.simulate import DEFAULT_AMPLITUDES, scaling_study
+    from nilpotent.simulation import DEFAULT_AMPLITUDES, scaling_study
 
     amps = (
         list(DEFAULT_AMPLITUDES)
         if amplitudes is None
         else parse_float_list(amplitudes, "--amplitudes")
     )
-    for a in amps:
-        check_positive(a, "--amplitudes")
-    if len(set(amps)) < 2:
-        raise OptionError("--amplitudes: give at least two different amplitudes")
-    check_positive(omega, "--omega")
-    check_periods(periods)
     check_plot_path(plot)
     system = load_model_option(model, param)
     pair = parse_int_pair(bracket, "--bracket", system.m)

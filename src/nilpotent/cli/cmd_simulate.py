@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Annotated
 
 import typer
@@ -23,32 +22,7 @@ from nilpotent.cli.app import (
     save_figure,
     stdout_console,
 )
-from nilpotent.errors import OptionError
-
-BracketOpt = Annotated[
-    str,
-    typer.Option(
-        "--bracket",
-        metavar="I,J",
-        help="The two fields whose bracket the loop realises (1-based, different).",
-    ),
-]
-OmegaOpt = Annotated[
-    float, typer.Option("--omega", metavar="W", help="Angular frequency ω of the loop (> 0).")
-]
-PeriodsOpt = Annotated[
-    int, typer.Option("--periods", metavar="K", help="Number of whole periods (>= 1).")
-]
-def check_positive(value: float, option: str) -> float:
-    if not (math.isfinite(value) and value > 0):
-        raise OptionError(f"{option} must be a positive number, got {value}")
-    return float(value)
-
-
-def check_periods(value: int) -> int:
-    if value < 1:
-        raise OptionError(f"--periods must be >= 1, got {value}")
-    return int(value)
+from nilpotent.cli.bracket_options import BracketOpt, OmegaOpt, PeriodsOpt
 
 
 def print_comparison(comp) -> None:
@@ -96,11 +70,8 @@ def simulate_command(
     json_out: JsonOpt = False,
 ) -> None:
     """Simulate u_I = -Aω sin ωt, u_J = Aω cos ωt on the system and its nilpotent approximation."""
-    from nilpotent.simulate import compare_bracket_motion
+    from nilpotent.simulation import compare_bracket_motion
 
-    check_positive(amplitude, "--amplitude")
-    check_positive(omega, "--omega")
-    check_periods(periods)
     check_plot_path(plot)
     system = load_model_option(model, param)
     pair = parse_int_pair(bracket, "--bracket", system.m)

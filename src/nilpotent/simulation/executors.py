@@ -75,20 +75,40 @@ def execute(
 ) -> Execution:
     """``[func(task) for task in tasks]``, here or on Dask (module docstring).
 
-    ``sizes[k]`` is the work in task ``k`` (trajectories); ``progress(done,
-    total)`` is called after each task with the sums of ``sizes``.
+    ``sizes[k]`` is the work in task ``k`` (trajectories).  Progress goes to
+    stderr through :func:`nilpotent.progress.progress` (shown where enabled,
+    as the CLI does); ``progress(done, total)``, when given, is also called
+    after each task with the sums of ``sizes``.
     """
+    from nilpotent.progress import progress as report
+
     total = int(sum(sizes))
-    if dask is None:
-        t0 = time.perf_counter()
-        outputs = []
-        done = 0
-        for task, size in zip(tasks, sizes, strict=True):
-            outputs.append(func(task))
-            done += int(size)
+    with report("bracket motions", total=total) as bar:
+
+        def tick(done: int) -> None:
+            bar.update(completed=done)
             if progress is not None:
                 progress(done, total)
-        return Execution(outputs, "local", None, time.perf_counter() - t0)
+
+        if dask is None:
+            return _execute_here(func, tasks, sizes, tick)
+        return _execute_dask(func, tasks, sizes, dask, tick)
+
+
+def _execute_here(func: Callable[[Any], Any], tasks: Sequence[Any], sizes: Sequence[int],
+                  tick: Callable[[int], None]) -> Execution:
+    t0 = time.perf_counter()
+    outputs = []
+    done = 0
+    for task, size in zip(tasks, sizes, strict=True):
+        outputs.append(func(task))
+        done += int(size)
+        tick(done)
+    return Execution(outputs, "local", None, time.perf_counter() - t0)
+
+
+def _execute_dask(func: Callable[[Any], Any], tasks: Sequence[Any], sizes: Sequence[int],
+                  dask: Any, tick: Callable[[int], None]) -> Execution:
     distributed = import_distributed()
     cluster = None
     if isinstance(dask, str):
@@ -118,8 +138,7 @@ def execute(
             k = index[fut.key]
             results[k] = fut.result()
             done += int(sizes[k])
-            if progress is not None:
-                progress(done, total)
+            tick(done)
         wall = time.perf_counter() - t0
     finally:
         if own_client:

@@ -287,7 +287,8 @@ def sweep(
         :class:`distributed.Client`: that cluster.  Needs the ``dask`` extra
         (:class:`~nilpotent.errors.MissingExtraError` otherwise).
     progress:
-        Called as ``progress(done_pairs, total_pairs)`` after each chunk.
+        Called as ``progress(done_pairs, total_pairs)`` after each chunk (progress is also
+        reported on stderr through :mod:`nilpotent.progress` where enabled).
 
     Returns
     -------
@@ -318,6 +319,10 @@ def sweep(
         raise OptionError(f"chunk_size must be a positive integer, got {chunk_size}")
     if not isinstance(seed, int | np.integer) or seed < 0:
         raise OptionError(f"seed must be an integer >= 0, got {seed!r}")
+    if not (math.isfinite(rtol) and rtol > 0 and math.isfinite(atol) and atol >= 0):
+        raise OptionError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
+    if not (math.isfinite(bound) and bound > 0):
+        raise OptionError(f"bound must be a number > 0, got {bound}")
     pairs = _check_brackets(system.m, brackets)
     varied = _parameter_sets(system, vary)
     check_dask(dask, chunk_size)
