@@ -127,11 +127,11 @@ def plan_command(
         stderr_console().print(f"planning {system.name} ...")
     result = plan(system, start, goal, tol, anchor=anchor, max_iterations=max_iterations)
     if plot is not None:
-        from nilpotent.planning.plotting import plot_plan
+        from nilpotent.viz.plan import plot_plan
 
         save_figure(plot_plan(result), plot)
     if animate is not None:
-        from nilpotent.planning.plotting import animate_plan
+        from nilpotent.viz.plan import animate_plan
 
         with write_atomically(animate) as tmp:
             animate_plan(result, tmp)

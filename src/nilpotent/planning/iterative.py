@@ -148,6 +148,12 @@ class Plan:
         """Total duration of the controls."""
         return float(sum(s.duration for s in self.segments))
 
+    def plot(self) -> Any:
+        """The plan's figure (:func:`nilpotent.viz.plan.plot_plan`): path, errors, inputs."""
+        from nilpotent.viz.plan import plot_plan
+
+        return plot_plan(self)
+
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/plan@1`` object of INTERFACE.md (plus extra fields)."""
         return {
