@@ -43,6 +43,7 @@ from nilpotent.numeric.engines.numba_engine import kernels_cached as kernels_cac
 from nilpotent.numeric.engines.scipy_engine import solve_function_input as solve_function_input
 from nilpotent.numeric.signals import Signal
 from nilpotent.numeric.tableaux import DOP853
+from nilpotent.numeric.types import PerTrajectory, Samples, States, Times
 
 METHODS: dict[str, str] = {
     "adaptive": "DOP853 with embedded error control (scipy's step-size rules)",
@@ -89,14 +90,14 @@ class BatchSolution:
 
     method: str
     engine: str
-    x0: np.ndarray
-    final: np.ndarray
-    times: np.ndarray
-    samples: np.ndarray
-    status: np.ndarray
-    steps: np.ndarray
-    rejected: np.ndarray
-    error_estimate: np.ndarray
+    x0: States
+    final: States
+    times: Times
+    samples: Samples
+    status: PerTrajectory
+    steps: PerTrajectory
+    rejected: PerTrajectory
+    error_estimate: PerTrajectory
     tolerance: float
     rtol: float
     atol: float

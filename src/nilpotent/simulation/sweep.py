@@ -58,7 +58,7 @@ import sympy as sp
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.integrate import METHODS
-from nilpotent.numeric.signals import bracket_inputs
+from nilpotent.numeric.signals import bracket_inputs, check_bracket
 from nilpotent.simulation.executors import MIN_DASK_CHUNK, check_dask, execute, versions
 from nilpotent.simulation.pair import CompiledPair
 from nilpotent.simulation.scaling import DEFAULT_AMPLITUDES
@@ -199,10 +199,7 @@ def _check_brackets(m: int, brackets: Any) -> tuple[tuple[int, int], ...]:
         pair = tuple(b)
         if len(pair) != 2 or not all(isinstance(v, int | np.integer) for v in pair):
             raise OptionError(f"a bracket is a pair of field numbers (I, J), got {b!r}")
-        i, j = int(pair[0]), int(pair[1])
-        if not (1 <= i <= m and 1 <= j <= m) or i == j:
-            raise OptionError(f"bracket ({i},{j}): need two different fields between 1 and {m}")
-        out.append((i, j))
+        out.append(check_bracket(m, pair))
     if not out:
         raise OptionError("give at least one bracket pair")
     return tuple(dict.fromkeys(out))
