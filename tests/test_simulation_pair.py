@@ -69,3 +69,21 @@ def test_a_nilpotent_system_is_its_own_approximation():
     diff = np.abs(run.y() - run.y_hat)
     for err in run.by_weight(diff, (1,)).values():
         assert np.all(err < 1e-10)
+
+
+def test_layers_import_only_downward():
+    """numeric loads no simulation; simulation loads no planning, viz, report or cli."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, nilpotent.numeric, nilpotent.numeric.engines;"
+        "bad = [m for m in sys.modules if m.startswith('nilpotent.simulation')];"
+        "import nilpotent.simulation;"
+        "bad += [m for m in sys.modules if m.split('.')[1:2] and m.split('.')[1] in "
+        "('planning', 'viz', 'report', 'cli')];"
+        "print(bad)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"

@@ -194,6 +194,11 @@ def floats(arr: np.ndarray) -> list[float]:
 def prepare_comparison(
     system: ControlSystem, bracket: Sequence[int], point: Any, approximation: Any
 ) -> tuple[ControlSystem, tuple[int, int], tuple[sp.Expr, ...], Any, np.ndarray]:
+    """``(system specialised, (I, J) checked, p exact, approximation at p, p as floats)``.
+
+    The approximation defaults to ``approximate(system, p)``; one given must be at ``p``
+    (:class:`OptionError` otherwise).
+    """
     sysp = system.specialized()
     pair = check_bracket(sysp.m, bracket)
     pt = sysp.point(point) if point is not None else sysp.origin()
