@@ -87,3 +87,18 @@ def test_layers_import_only_downward():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+def test_stable_import_paths_re_export_the_one_home():
+    import nilpotent.simulate as simulate_path
+    import nilpotent.simulation as simulation
+    import nilpotent.sweep as sweep_path
+    from nilpotent.numeric import signals
+
+    for name in ("simulate", "compare_bracket_motion", "scaling_study", "Comparison",
+                 "ScalingStudy", "Trajectory", "DEFAULT_AMPLITUDES"):
+        assert getattr(simulate_path, name) is getattr(simulation, name)
+    for name in ("Signal", "FunctionSignal", "bracket_signal", "sinusoids", "piecewise_constant"):
+        assert getattr(simulate_path, name) is getattr(signals, name)
+    for name in ("sweep", "SweepResult", "SweepParameters", "amplitude_range", "DESIGNS"):
+        assert getattr(sweep_path, name) is getattr(simulation, name)
