@@ -199,20 +199,21 @@ def integrate(
         min_step = 1e-13 * float(np.max(total))
     chosen = choose_engine(system, method, engine, batch)
     chosen.require()
-    common = dict(
-        rtol=float(rtol), atol=float(atol), max_steps=int(max_steps),
-        min_step=float(min_step), bound=float(bound), threads=threads,
-    )
     adaptive = method == "adaptive"
-    final, samples, info = chosen.solve(system, xs, sig, ts, adaptive=adaptive,
-                                        steps=int(steps), **common)
+
+    def run(step_count: int, adaptive_steps: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return chosen.solve(system, xs, sig, ts, adaptive=adaptive_steps, steps=step_count,
+                            rtol=float(rtol), atol=float(atol), max_steps=int(max_steps),
+                            min_step=float(min_step), bound=float(bound), threads=threads)
+
+    final, samples, info = run(int(steps), adaptive)
     status = info[:, 0].astype(np.int64)
     err = info[:, 3].copy() if chosen.name == "numba" and adaptive else np.full(batch, np.nan)
     if adaptive:
         tolerance = float(rtol)
     elif estimate_error:
         half = int(steps) // 2
-        f2, s2, _ = chosen.solve(system, xs, sig, ts, adaptive=False, steps=half, **common)
+        f2, s2, _ = run(half, False)
         diff = np.abs(final - f2).max(axis=1)
         if ts.size:
             diff = np.maximum(diff, np.nan_to_num(np.abs(samples - s2), nan=np.inf).max(

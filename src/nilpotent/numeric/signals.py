@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from nilpotent.errors import OptionError
 
@@ -470,7 +471,7 @@ def bracket_inputs(
     m: int,
     i: int | Sequence[int] | np.ndarray,
     j: int | Sequence[int] | np.ndarray,
-    amplitudes: np.ndarray | float,
+    amplitudes: npt.ArrayLike,
     omega: float = 1.0,
     periods: int = 1,
 ) -> Signal:

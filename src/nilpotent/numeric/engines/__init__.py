@@ -122,6 +122,11 @@ class Engine(abc.ABC):
         """Whether the engine's dependencies can be imported."""
         return True
 
+    def cached(self, system: Any) -> bool:
+        """Whether running ``system`` needs no compilation first (``"auto"`` prefers such)."""
+        del system
+        return True
+
     def require(self) -> None:
         """Raise :class:`MissingExtraError` (naming the install) if not :meth:`available`."""
         if not self.available():

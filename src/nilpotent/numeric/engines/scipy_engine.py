@@ -58,7 +58,7 @@ def solve_function_input(
     system: CompiledSystem,
     x0: Any,
     u: Callable[[float], Any],
-    breakpoints: Sequence[float],
+    breakpoints: Sequence[float] | np.ndarray,
     *,
     times: Sequence[float] | np.ndarray | None = None,
     rtol: float = 1e-10,
