@@ -342,6 +342,14 @@ def compile_system(system: Any, *, backend: str = "auto") -> CompiledSystem:
 
     Memoised per ``(system, backend)`` (the 128 most recent): compiling is
     symbolic work (substitution, hashing) worth doing once per system.
+
+    Parameters
+    ----------
+    system : ControlSystem
+        The system (or anything hashable with ``coordinates``, ``specialized_fields``
+        and ``name``).
+    backend : str
+        As in :func:`compile_fields`.
     """
     return _compile_system(system, backend)
 

@@ -25,8 +25,18 @@ def loglog_line(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 def loglog_slope(x: np.ndarray, y: np.ndarray, floor: float = 0.0) -> float | None:
     r"""The slope $s$ of $\log y$ on $\log x$ over the points with finite ``y > floor``.
 
-    Returns ``None`` where fewer than two different ``x`` remain (the errors
-    are at the noise floor: the approximation is exact there).
+    Parameters
+    ----------
+    x, y : (k,) array_like
+        The abscissae (positive) and the values.
+    floor : float
+        Values at or below it are noise and not fitted.
+
+    Returns
+    -------
+    float or None
+        The slope; ``None`` where fewer than two different ``x`` remain (the
+        errors are at the noise floor: the approximation is exact there).
 
     Examples
     --------

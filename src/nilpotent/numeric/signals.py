@@ -477,10 +477,27 @@ def bracket_inputs(
 ) -> Signal:
     """The periodic bracket inputs ``u_i = −Aω sin ωt``, ``u_j = Aω cos ωt`` (others 0).
 
-    ``i``, ``j`` are 1-based input numbers, one pair for every row or one pair
-    per row (``(B,)`` arrays); one segment of ``periods`` periods (duration
-    ``2π·periods/ω``); one control per amplitude.  The loop ``(∫u_i, ∫u_j)``
-    is a counter-clockwise circle of area ``πA²`` per period.
+    One segment of ``periods`` periods (duration ``2π·periods/ω``); one
+    control per amplitude.  The loop ``(∫u_i, ∫u_j)`` is a counter-clockwise
+    circle of area ``πA²`` per period.
+
+    Parameters
+    ----------
+    m : int
+        Number of inputs.
+    i, j : int or (B,) int array
+        1-based input numbers: one pair for every row, or one pair per row.
+    amplitudes : float or (B,) array
+        The amplitudes ``A``, one control each.
+    omega : float
+        ``ω > 0`` (rad/s).
+    periods : int
+        Whole periods ``≥ 1``.
+
+    Raises
+    ------
+    OptionError
+        A pair out of range or equal, or a non-positive frequency or period count.
     """
     amps = np.atleast_1d(np.asarray(amplitudes, dtype=float))
     if amps.ndim != 1:
@@ -514,9 +531,25 @@ def bracket_signal(
 ) -> Signal:
     r"""One periodic bracket input $u_i = -A\omega\sin\omega t$, $u_j = A\omega\cos\omega t$.
 
-    ``i``, ``j``: 1-based, different, at most ``m``; ``amplitude`` > 0;
-    ``periods`` whole periods (duration $2\pi K/\omega$).  Over each period it
-    moves a system by $\pi A^2 [X_i, X_j](p) + O(A^3)$.
+    Over each period it moves a system by $\pi A^2 [X_i, X_j](p) + O(A^3)$.
+
+    Parameters
+    ----------
+    m : int
+        Number of inputs.
+    i, j : int
+        The bracket's inputs, 1-based, different, at most ``m``.
+    amplitude : float
+        $A > 0$.
+    omega : float
+        $\omega > 0$ (rad/s).
+    periods : int
+        Whole periods $K \ge 1$ (duration $2\pi K/\omega$).
+
+    Raises
+    ------
+    OptionError
+        Inputs out of range or equal, or a non-positive amplitude, frequency or period count.
     """
     check_bracket(m, (i, j))
     if not (math.isfinite(amplitude) and amplitude > 0):
@@ -533,7 +566,17 @@ def sinusoids(
 ) -> Signal:
     r"""One segment $u_i = a_i + \sum_k b_{ik}\cos k\omega t + c_{ik}\sin k\omega t$.
 
-    ``cos[i]`` and ``sin[i]`` may have different lengths per input (padded with 0).
+    Parameters
+    ----------
+    constant : sequence of float
+        ``(a_i)``, one per input.
+    cos, sin : sequence of sequences of float
+        ``cos[i][k-1]`` $= b_{ik}$, ``sin[i][k-1]`` $= c_{ik}$; the lengths may
+        differ per input (padded with 0).
+    omega : float
+        $\omega > 0$.
+    duration : float
+        The segment's duration (> 0).
     """
     m = len(constant)
     if len(cos) != m or len(sin) != m:
@@ -544,7 +587,15 @@ def sinusoids(
 
 
 def piecewise_constant(values: Any, durations: Sequence[float]) -> Signal:
-    """Inputs constant on each segment: ``values`` ``(S, m)``, ``durations`` ``(S,)``."""
+    """Inputs constant on each segment.
+
+    Parameters
+    ----------
+    values : (S, m) array_like
+        The inputs on each segment.
+    durations : (S,) sequence of float
+        The segments' durations (> 0).
+    """
     vals = np.atleast_2d(np.asarray(values, dtype=float))
     s, m = vals.shape
     d = np.asarray(durations, dtype=float).reshape(1, -1)

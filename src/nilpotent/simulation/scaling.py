@@ -118,8 +118,21 @@ def scaling_study(
     The slope of each group is fitted by least squares on the errors above
     the noise floor ``1e3·(atol + rtol·max|y|)``.
 
-    Parameters are those of :func:`compare_bracket_motion`; ``amplitudes``
-    must be positive and contain at least two different values.
+    Parameters
+    ----------
+    sys, bracket, omega, periods, point : see :func:`compare_bracket_motion`
+        The system, the bracket ``(I, J)`` and the input's frequency, periods, start.
+    approximation, samples, rtol, atol, engine : see :func:`compare_bracket_motion`
+        The approximation to compare with, samples per run, tolerances, engine.
+    amplitudes : sequence of float
+        Positive amplitudes, at least two different values.
+
+    Raises
+    ------
+    OptionError
+        Fewer than two different amplitudes, a non-positive one, or a bad bracket or input.
+    IntegrationError
+        A simulation stopped before the end.
     """
     amps = np.asarray([float(a) for a in amplitudes])
     if amps.size < 2 or np.unique(amps).size < 2:

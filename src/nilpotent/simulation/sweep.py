@@ -88,6 +88,13 @@ def amplitude_range(low: float, high: float, count: int) -> tuple[float, ...]:
 
     Logarithmic spacing gives the log–log fits of :meth:`SweepResult.fits`
     evenly spread points.  ``count == 1`` needs ``low == high``.
+
+    Parameters
+    ----------
+    low, high : float
+        The smallest and largest amplitude (``0 < low ≤ high``).
+    count : int
+        How many amplitudes (≥ 1).
     """
     if not (math.isfinite(low) and math.isfinite(high) and 0 < low <= high):
         raise OptionError(f"amplitudes: need 0 < A1 <= A2, got {low} and {high}")
