@@ -173,6 +173,15 @@ def integrate(
     threads:
         Number of numba threads (default: numba's setting), or of threads
         running heyoka's SIMD batches (default 1).
+
+    Raises
+    ------
+    OptionError
+        An unknown ``method`` or ``engine``, initial states whose shape is not
+        ``(B, n)``, inputs for another number of fields or batch size, or bad
+        tolerances, steps or bounds.
+    MissingExtraError
+        The engine asked for is not installed.
     """
     if method not in METHODS:
         raise OptionError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")

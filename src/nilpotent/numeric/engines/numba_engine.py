@@ -27,9 +27,12 @@ def _numba_threads(threads: int | None) -> Iterator[None]:
         yield
         return
     import numba
+    from numba.core import config as numba_config
 
+    # NUMBA_NUM_THREADS is set on numba.core.config at import (invisible to type checkers)
+    limit = int(numba_config.NUMBA_NUM_THREADS)  # pyright: ignore[reportAttributeAccessIssue]
     previous = numba.get_num_threads()
-    numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
+    numba.set_num_threads(max(1, min(int(threads), limit)))
     try:
         yield
     finally:
