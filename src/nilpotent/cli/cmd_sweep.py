@@ -198,11 +198,19 @@ def sweep_command(
     pairs = [parse_int_pair(b, "--bracket", system.m) for b in bracket]
     point = parse_point_option(at, system)
 
-    result = sweep(
-        system, pairs, amps, point=point, samples=samples, radius=radius, seed=seed,
-        design=design, vary=varied or None, periods=periods, rtol=rtol, atol=rtol * 1e-2,
-        bound=bound, chunk_size=chunk_size, dask=dask,
-    )
+    from nilpotent.progress import progress as report
+
+    with report("bracket motions") as bar:
+
+        def progress(done: int, total: int) -> None:
+            bar.total = total
+            bar.update(done)
+
+        result = sweep(
+            system, pairs, amps, point=point, samples=samples, radius=radius, seed=seed,
+            design=design, vary=varied or None, periods=periods, rtol=rtol, atol=rtol * 1e-2,
+            bound=bound, chunk_size=chunk_size, dask=dask, progress=progress,
+        )
     if out is not None:
         with write_atomically(out, suffix=".csv") as tmp:
             result.to_csv(tmp)

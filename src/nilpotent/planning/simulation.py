@@ -93,6 +93,8 @@ def simulate_path(
     )
     if traj.status != Status.SUCCESS:
         raise IntegrationError(
-            f"simulating the plan of {system.name} failed (status {int(traj.status)})"
+            f"simulating the plan of {system.name!r} failed: "
+            f"{traj.status.message} (the controls drive the system where "
+            "it cannot be integrated; try a nearer goal, --anchor goal or fewer iterations)"
         )
     return traj

@@ -75,24 +75,19 @@ def execute(
 ) -> Execution:
     """``[func(task) for task in tasks]``, here or on Dask (module docstring).
 
-    ``sizes[k]`` is the work in task ``k`` (trajectories).  Progress goes to
-    stderr through :func:`nilpotent.progress.progress` (shown where enabled,
-    as the CLI does); ``progress(done, total)``, when given, is also called
-    after each task with the sums of ``sizes``.
+    ``sizes[k]`` is the work in task ``k`` (trajectories); ``progress(done,
+    total)``, when given, is called after each task with the sums of ``sizes``
+    (the CLI feeds it to :func:`nilpotent.progress.progress`).
     """
-    from nilpotent.progress import progress as report
-
     total = int(sum(sizes))
-    with report("bracket motions", total=total) as bar:
 
-        def tick(done: int) -> None:
-            bar.update(completed=done)
-            if progress is not None:
-                progress(done, total)
+    def tick(done: int) -> None:
+        if progress is not None:
+            progress(done, total)
 
-        if dask is None:
-            return _execute_here(func, tasks, sizes, tick)
-        return _execute_dask(func, tasks, sizes, dask, tick)
+    if dask is None:
+        return _execute_here(func, tasks, sizes, tick)
+    return _execute_dask(func, tasks, sizes, dask, tick)
 
 
 def _execute_here(func: Callable[[Any], Any], tasks: Sequence[Any], sizes: Sequence[int],

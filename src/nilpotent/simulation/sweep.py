@@ -291,8 +291,7 @@ def sweep(
         :class:`distributed.Client`: that cluster.  Needs the ``dask`` extra
         (:class:`~nilpotent.errors.MissingExtraError` otherwise).
     progress:
-        Called as ``progress(done_pairs, total_pairs)`` after each chunk (progress is also
-        reported on stderr through :mod:`nilpotent.progress` where enabled).
+        Called as ``progress(done_pairs, total_pairs)`` after each chunk.
 
     Returns
     -------
