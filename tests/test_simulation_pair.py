@@ -102,3 +102,18 @@ def test_stable_import_paths_re_export_the_one_home():
         assert getattr(simulate_path, name) is getattr(signals, name)
     for name in ("sweep", "SweepResult", "SweepParameters", "amplitude_range", "DESIGNS"):
         assert getattr(sweep_path, name) is getattr(simulation, name)
+
+
+def test_a_trajectory_from_samples_alone():
+    """Trajectory(times, states): samples computed elsewhere (a planner's verifier)."""
+    from nilpotent.simulation import Trajectory
+
+    times = np.linspace(0.0, 1.0, 4)
+    states = np.column_stack([times, times**2])
+    traj = Trajectory(times, states)
+    np.testing.assert_array_equal(traj.x0, [0.0, 0.0])
+    np.testing.assert_array_equal(traj.final, [1.0, 1.0])
+    _fig, ax = traj.plot()
+    assert len(ax.lines) == 2
+    with pytest.raises(Exception, match="states"):
+        Trajectory(times, states[:2])

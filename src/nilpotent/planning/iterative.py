@@ -45,7 +45,7 @@ from nilpotent.planning.controls import (
 )
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
-from nilpotent.planning.simulation import simulate_candidates, simulate_path, single_engine
+from nilpotent.planning.simulation import simulate_candidates, simulate_plan, single_engine
 from nilpotent.simulation.trajectory import Trajectory
 
 ANCHORS = ("current", "goal", "start")
@@ -522,7 +522,7 @@ def plan(
             failure = (
                 f"{failure}; the shooting refinement then went from {before:.3g} to {error:.3g}"
             )
-    trajectory = simulate_path(system, x0, segments, trajectory_points, engine)
+    trajectory = simulate_plan(system, x0, segments, trajectory_points, engine)
     result = Plan(
         system=system,
         start=tuple(float(v) for v in x0),

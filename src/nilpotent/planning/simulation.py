@@ -69,6 +69,24 @@ def simulate_path(
     segments: Sequence[Segment],
     points_per_segment: int = 40,
     engine: str = "auto",
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(times, states)`` of the true system under ``segments`` (:func:`simulate_plan`'s samples).
+
+    Raises
+    ------
+    IntegrationError
+        The integration stopped before the end of the controls.
+    """
+    traj = simulate_plan(system, x0, segments, points_per_segment, engine)
+    return np.array(traj.times), np.array(traj.states)
+
+
+def simulate_plan(
+    system: ControlSystem,
+    x0: Sequence[float],
+    segments: Sequence[Segment],
+    points_per_segment: int = 40,
+    engine: str = "auto",
 ) -> Trajectory:
     """The true system's :class:`~nilpotent.simulation.trajectory.Trajectory` under
     ``segments``, sampled ``points_per_segment`` times in every segment.

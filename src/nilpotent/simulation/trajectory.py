@@ -45,43 +45,58 @@ def float_point(system: ControlSystem | CompiledSystem, x0: Any) -> State:
 
 @dataclass(frozen=True, eq=False)
 class Trajectory:
-    """One simulated trajectory, with what it was computed from.
+    """One trajectory: its samples, and what it was computed from.
+
+    ``Trajectory(times, states)`` alone is a trajectory sampled elsewhere
+    (``x0`` and ``final`` are then its first and last samples); :func:`simulate`
+    fills in the rest.
 
     Attributes
     ----------
+    times, states:
+        ``(T,)`` sample times and ``(T, n)`` states there.
     system:
         Name of the system.
     coordinates:
         Names of the state components.
     x0:
         ``(n,)`` start.
+    final:
+        ``(n,)`` state at the end of the input.
     signal:
         The input (:class:`~nilpotent.numeric.signals.Signal` or
         :class:`~nilpotent.numeric.signals.FunctionSignal`; ``None`` for the
-        empty control, a trajectory that stays at ``x0``).
-    times, states:
-        ``(T,)`` sample times and ``(T, n)`` states there.
-    final:
-        ``(n,)`` state at the end of the input.
+        empty control, or when not known).
     status:
         :class:`~nilpotent.numeric.integrate.Status` of the integration.
     tolerance:
-        Accuracy met (see :class:`~nilpotent.numeric.integrate.BatchSolution`).
+        Accuracy met (see :class:`~nilpotent.numeric.integrate.BatchSolution`;
+        NaN when not known).
     method, engine:
-        How it was integrated.
+        How it was integrated (``""`` when not known).
     """
 
-    system: str
-    coordinates: tuple[str, ...]
-    x0: State
-    signal: Signal | FunctionSignal | None
     times: Times
     states: States
-    final: State
-    status: Status
-    tolerance: float
-    method: str
-    engine: str
+    system: str = ""
+    coordinates: tuple[str, ...] = ()
+    x0: State | None = None
+    final: State | None = None
+    signal: Signal | FunctionSignal | None = None
+    status: Status = Status.SUCCESS
+    tolerance: float = float("nan")
+    method: str = ""
+    engine: str = ""
+
+    def __post_init__(self) -> None:
+        states = np.asarray(self.states, dtype=float)
+        if states.ndim != 2 or states.shape[0] != np.shape(self.times)[0]:
+            raise OptionError(f"a trajectory needs states (T, n) for its T times, got "
+                              f"{states.shape} for {np.shape(self.times)}")
+        if self.x0 is None and states.shape[0]:
+            object.__setattr__(self, "x0", states[0].copy())
+        if self.final is None and states.shape[0]:
+            object.__setattr__(self, "final", states[-1].copy())
 
     def plot(self, ax: Any = None) -> tuple[Any, Any]:
         """Every coordinate against time; returns ``(figure, axes)`` (:mod:`nilpotent.viz`)."""
@@ -156,15 +171,15 @@ def simulate(
             compiled, start, signal.evaluate, signal.breakpoints, times=ts,
             rtol=rtol, atol=atol, max_steps=max_steps, bound=bound,
         )
-        return Trajectory(compiled.name, compiled.coordinate_names, start, signal, ts,
-                          states, final, status, float(rtol), "adaptive", "scipy")
+        return Trajectory(ts, states, compiled.name, compiled.coordinate_names, start, final,
+                          signal, status, float(rtol), "adaptive", "scipy")
     sol = integrate(
         compiled, start[None], signal, method=method, engine=engine, times=ts,
         rtol=rtol, atol=atol, steps=steps, bound=bound, max_steps=max_steps,
     )
     return Trajectory(
-        compiled.name, compiled.coordinate_names, start, signal, np.asarray(sol.times),
-        sol.samples[0].copy(), sol.final[0].copy(), Status(int(sol.status[0])), sol.tolerance,
+        np.asarray(sol.times), sol.samples[0].copy(), compiled.name, compiled.coordinate_names,
+        start, sol.final[0].copy(), signal, Status(int(sol.status[0])), sol.tolerance,
         sol.method, sol.engine,
     )
 
@@ -173,5 +188,6 @@ def stationary(sys: ControlSystem | CompiledSystem, x0: Any) -> Trajectory:
     """The trajectory of the empty control: one sample, at ``x0``, at time 0."""
     compiled = as_compiled(sys)
     start = float_point(compiled, x0)
-    return Trajectory(compiled.name, compiled.coordinate_names, start, None, np.zeros(1),
-                      start[None, :].copy(), start.copy(), Status.SUCCESS, 0.0, "none", "none")
+    return Trajectory(np.zeros(1), start[None, :].copy(), compiled.name,
+                      compiled.coordinate_names, start, start.copy(), None, Status.SUCCESS, 0.0,
+                      "none", "none")

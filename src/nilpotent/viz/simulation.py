@@ -32,11 +32,13 @@ def _figure_axes(ax: Any) -> tuple[Any, Any]:
 def plot_trajectory(traj: Any, ax: Any = None) -> tuple[Any, Any]:
     """Every coordinate of a :class:`~nilpotent.simulation.Trajectory` against time."""
     fig, ax = _figure_axes(ax)
-    for k, name in enumerate(traj.coordinates):
+    n = traj.states.shape[1]
+    names = traj.coordinates or tuple(f"x{k + 1}" for k in range(n))
+    for k, name in enumerate(names):
         ax.plot(traj.times, traj.states[:, k], label=name)
     ax.set_xlabel("t")
     ax.set_ylabel("state")
-    ax.set_title(f"{traj.system}")
+    ax.set_title(traj.system or "trajectory")
     ax.legend(loc="best", fontsize="small")
     return fig, ax
 
