@@ -78,3 +78,17 @@ class ComputationLimitError(NilpotentError):
     """A symbolic result would be too large to compute or print in reasonable time."""
 
     kind = "computation-limit"
+
+
+class OutputError(NilpotentError):
+    """An output (a file, a folder, stdout) cannot be written: missing or read-only folder,
+    a folder where a file is expected, a full disk, a closed stdout."""
+
+    kind = "output"
+
+
+class UsageError(NilpotentError):
+    """The command line itself is malformed: a missing or unknown option, a value of the
+    wrong type (reported by the option parser before a command runs)."""
+
+    kind = "usage"

@@ -5,7 +5,9 @@ approximations, simulations, sweeps, the paper reproduction):
 
 - on a terminal, a rich progress bar on stderr;
 - on a pipe or a file (CI, ``2> log``), plain lines ``nilpotent: <what>: <done>/<total>``,
-  at most one per :data:`PLAIN_INTERVAL` seconds (plus the first and the last);
+  at most one per :data:`PLAIN_INTERVAL` seconds, the first after :data:`PLAIN_INTERVAL`
+  seconds (a quick task prints nothing), a line every :data:`HEARTBEAT` seconds of
+  silence (``... (still running, 12 s)``) and a last one when a reported task ends;
 - nothing at all until :func:`configure` enables it (the CLI does; a notebook or a
   script may), so that library calls stay silent by default.
 
@@ -34,6 +36,10 @@ from typing import TextIO
 PLAIN_INTERVAL = 1.0
 """Seconds between two plain progress lines of one task (rate limit off a terminal)."""
 
+HEARTBEAT = 5.0
+"""Seconds of silence after which a plain progress line says the task is still running
+(so that a long step that reports nothing, an exact rank decision, still shows life)."""
+
 _state = {"enabled": False}
 _lock = threading.Lock()
 
@@ -50,7 +56,7 @@ def enabled() -> bool:
 
 def _plain_text(text: str, limit: int = 200) -> str:
     """``text`` with control characters removed and its length bounded (user text is printed)."""
-    clean = "".join(ch if ch.isprintable() else "?" for ch in text)
+    clean = "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
     if len(clean) > limit:
         clean = clean[:limit] + f"... ({len(clean) - limit} more characters)"
     return clean
@@ -68,6 +74,8 @@ class Progress:
     _last: float = field(default=0.0)
     _bar: object | None = None
     _task: object | None = None
+    _start: float = field(default=0.0)
+    _emitted: bool = False
 
     def advance(self, n: int = 1, detail: str | None = None) -> None:
         """Count ``n`` more units of work done (optionally with a short detail text)."""
@@ -94,11 +102,14 @@ class Progress:
         return text
 
     def _emit(self, suffix: str = "") -> None:
-        count = f"{self.completed}/{self.total}" if self.total else f"{self.completed}"
-        line = f"nilpotent: {self._label()}: {count}{suffix}\n"
+        count = f"{self.completed}/{self.total}" if self.total else (
+            f"{self.completed}" if self.completed else "")
+        line = f"nilpotent: {self._label()}{': ' if count else ''}{count}{suffix}\n"
         with _lock:
+            self._emitted = True
             try:
-                assert self._stream is not None
+                if self._stream is None:
+                    return
                 self._stream.write(line)
                 self._stream.flush()
             except (OSError, ValueError):
@@ -154,10 +165,30 @@ def progress(
             yield task
         return
     task._stream = out
-    task._emit(" (started)")
-    task._last = time.monotonic()
-    start = task._last
+    task._last = time.monotonic()  # the first line comes after PLAIN_INTERVAL: a quick
+    start = task._start = task._last  # task prints nothing at all
+    stop = threading.Event()
+    beat = threading.Thread(target=_heartbeat, args=(task, stop), daemon=True)
+    beat.start()
     try:
         yield task
     finally:
-        task._emit(f" (done in {time.monotonic() - start:.1f} s)")
+        stop.set()
+        beat.join()
+        if task._emitted:
+            task._emit(f" (done in {time.monotonic() - start:.1f} s)")
+
+
+def _heartbeat(task: Progress, stop: threading.Event) -> None:
+    """Say that ``task`` is still running after :data:`HEARTBEAT` seconds of silence."""
+    while not stop.wait(min(HEARTBEAT, PLAIN_INTERVAL) / 2):
+        now = time.monotonic()
+        quiet_for = now - task._last
+        if task._stream is None:
+            return
+        if task._emitted and quiet_for < HEARTBEAT:
+            continue
+        if not task._emitted and quiet_for < PLAIN_INTERVAL:
+            continue
+        task._emit(f" (still running, {now - task._start:.0f} s)")
+        task._last = now

@@ -16,19 +16,22 @@ Conventions for every command:
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import json
-import os
 import sys
-import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
 import typer
 
-from nilpotent.errors import NilpotentError, OptionError
+from nilpotent.errors import (
+    ComputationLimitError,
+    NilpotentError,
+    OptionError,
+    OutputError,
+)
+from nilpotent.outputs import check_writable, write_atomically
+from nilpotent.strict_json import json_safe, json_text  # noqa: F401  (re-exported)
 
 app = typer.Typer(
     name="nilpotent",
@@ -74,8 +77,9 @@ PlotOpt = Annotated[
 ]
 
 
-def check_plot_path(path: Path | None) -> None:
-    """Refuse a ``--plot`` file whose suffix matplotlib cannot write."""
+def check_plot_path(path: Path | None, option: str = "--plot") -> None:
+    """Refuse, before the work, a figure file matplotlib cannot write or that cannot be
+    written at all (missing or read-only folder, a folder, ``/proc/...``)."""
     if path is None:
         return
     from matplotlib.backend_bases import FigureCanvasBase
@@ -84,15 +88,60 @@ def check_plot_path(path: Path | None) -> None:
     suffix = path.suffix.lower().lstrip(".")
     if suffix not in kinds:
         raise OptionError(
-            f"--plot {path}: unknown image type {suffix!r} (use one of {', '.join(sorted(kinds))})"
+            f"{option} {literal(path)}: unknown image type {literal(suffix)!r} "
+            f"(use one of {', '.join(sorted(kinds))})"
         )
+    check_writable(path, option)
 
 
-def save_figure(fig: Any, path: Path) -> None:
-    """Write ``fig`` to ``path`` whole or not at all."""
+def mathtext_literal(text: str) -> str:
+    """``text`` as matplotlib shows it literally: control characters escaped and every
+    ``$`` escaped, so that user text is never parsed as mathtext."""
+    return literal(text, 120).replace("$", r"\$")
+
+
+def save_figure(fig: Any, path: Path, user_texts: tuple[str, ...] = ()) -> None:
+    """Write ``fig`` to ``path`` whole or not at all.
+
+    ``user_texts`` (a model name, ...) are shown literally wherever they appear in the
+    figure's texts (titles, labels, legends): escaped for mathtext and for control
+    characters, whatever the plotting code did with them.
+    """
+    if user_texts:
+        from matplotlib.text import Text
+
+        wanted = [(t, mathtext_literal(t)) for t in user_texts if t]
+        for artist in fig.findobj(Text):
+            content = artist.get_text()
+            changed = content
+            for raw, safe in wanted:
+                if raw != safe and raw in changed:
+                    changed = changed.replace(raw, safe)
+            if changed != content:
+                artist.set_text(changed)
     with write_atomically(path) as tmp:
         fig.savefig(tmp, format=path.suffix.lower().lstrip("."), dpi=120)
 
+
+# --- limits of integer options (bounded time and memory) ----------------------------
+MAX_PERIODS = 1000
+"""Most whole periods of a loop (``--periods``)."""
+MAX_ITERATIONS = 1000
+"""Most planning iterations (``--max-iterations``)."""
+MAX_SAMPLES = 1_000_000
+"""Most start points of a sweep (``--samples``)."""
+MAX_AMPLITUDE_COUNT = 10_000
+"""Most amplitudes of a sweep (``--amplitudes A1:A2:N``)."""
+MAX_SWEEP_MOTIONS = 2_000_000
+"""Most bracket motions of one sweep (amplitudes x start points x brackets x parameter
+values); each costs a pair of trajectories in memory."""
+MAX_CHUNK_SIZE = 1_000_000
+"""Largest chunk of a sweep (``--chunk-size``)."""
+MAX_SEED = 2**63 - 1
+"""Largest random seed (``--seed``)."""
+MAX_BRACKET_LENGTH = 64
+"""Longest bracket length an option may ask for (``--max-length``); the Hall-word budget
+of :mod:`nilpotent.core.filtration` usually bounds it lower."""
 
 JsonOpt = Annotated[
     bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else.")
@@ -100,16 +149,34 @@ JsonOpt = Annotated[
 
 
 def stderr_console():
-    """A rich console on stderr (progress, logs, tables for humans when stdout is JSON)."""
+    """A rich console on stderr (logs for humans); markup and highlighting are off, so
+    user text prints literally (pass it through :func:`literal` for control characters)."""
     from rich.console import Console
 
-    return Console(stderr=True)
+    return Console(stderr=True, markup=False, highlight=False, emoji=False)
 
 
 def stdout_console():
+    """A rich console on stdout for human output; markup and highlighting are off, so a
+    model named ``[/bold]`` prints as is (pass user text through :func:`literal`)."""
     from rich.console import Console
 
-    return Console()
+    return Console(markup=False, highlight=False, emoji=False)
+
+
+def print_heading(console: Any, name: str, rest: str) -> None:
+    """Print ``name`` (user text, shown literally, in bold) followed by ``rest``."""
+    from rich.text import Text
+
+    console.print(Text.assemble((literal(name), "bold"), rest))
+
+
+def work(description: str, total: int | None = None):
+    """Progress of one long step on stderr (:func:`nilpotent.progress.progress`): a rich
+    bar on a terminal, plain rate-limited lines otherwise, nothing under ``--quiet``."""
+    from nilpotent.progress import progress
+
+    return progress(description, total)
 
 
 def load_model_option(spec: str, params: list[str] | None):
@@ -130,25 +197,83 @@ def parse_point_option(text: str | None, system, option: str = "--at"):
     return parse_point(text, system, option=option)
 
 
+def literal(text: object, limit: int = 200) -> str:
+    """User text made safe to print: control characters escaped, length bounded.
+
+    Escape sequences (``\\x1b[2J``), bidirectional overrides and other
+    non-printable characters are shown as Python escapes (``\\x1b``) instead of
+    reaching the terminal; past ``limit`` characters the text is cut and the
+    number of characters left out is said. Rich markup is not read anywhere in
+    the CLI's output (see :func:`stdout_console`), so ``[/bold]`` prints as is.
+    """
+    raw = str(text)
+    clean = "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in raw)
+    if len(clean) > limit:
+        clean = clean[:limit] + f"... ({len(clean) - limit} more characters)"
+    return clean
+
+
+MESSAGE_LIMIT = 2000
+"""Longest error message printed, in characters (the rest is cut, with a count)."""
+
+
+def _write_stdout(text: str) -> None:
+    out = sys.stdout
+    if out is None:
+        raise OutputError("cannot print the result: stdout is closed")
+    try:
+        out.write(text)
+        out.flush()
+    except BrokenPipeError:
+        raise  # the reader went away: main() exits quietly
+    except OSError as exc:
+        raise OutputError(f"cannot print the result on stdout ({exc.strerror or exc})") from None
+
+
 def emit_json(obj: Any) -> None:
     """Print one JSON object on stdout (the only thing printed under ``--json``)."""
-    sys.stdout.write(json.dumps(obj, indent=2, allow_nan=False) + "\n")
-    sys.stdout.flush()
+    _write_stdout(json_text(obj))
+
+
+def bounded_message(message: str, limit: int = MESSAGE_LIMIT) -> str:
+    """``message`` cut to ``limit`` characters, saying how many were left out."""
+    if len(message) <= limit:
+        return message
+    return message[:limit] + f"... ({len(message) - limit} more characters not shown)"
 
 
 def emit_error(exc: NilpotentError, as_json: bool) -> None:
-    message = str(exc)
+    """Report a user error: one JSON object on stdout under ``--json``, else one line on
+    stderr; the message is bounded and its control characters escaped."""
+    report_error(exc.kind, str(exc), as_json)
+
+
+def report_error(kind: str, message: str, as_json: bool) -> None:
+    """Report an error of ``kind`` (see :func:`emit_error`); never raises."""
+    message = bounded_message(message)
     if as_json:
-        emit_json({"error": {"kind": exc.kind, "message": message}})
-    else:
-        sys.stderr.write(f"nilpotent: error: {message}\n")
+        try:
+            _write_stdout(json_text({"error": {"kind": kind, "message": message}}))
+            return
+        except (OSError, NilpotentError):
+            pass  # stdout unusable: say it on stderr instead
+    try:
+        text = literal(message, MESSAGE_LIMIT + 100)
+        sys.stderr.write(f"nilpotent: error: {text}\n")
+        sys.stderr.flush()
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def cli_errors(func: F) -> F:
     """Turn :class:`NilpotentError` into a clear message and exit status 2.
 
     The wrapped command must take a ``json_out`` keyword (its ``--json`` flag)
-    if it has one; errors are then reported as JSON on stdout.
+    if it has one; errors are then reported as JSON on stdout. Also mapped
+    here: a too deep recursion (input nested too deeply), an ``OSError`` of
+    the files the command writes or reads (:class:`OutputError`), running out
+    of memory (:class:`ComputationLimitError`). Anything else is an internal
+    error, reported by :func:`nilpotent.cli.main` (exit status 70).
     """
 
     @functools.wraps(func)
@@ -162,8 +287,54 @@ def cli_errors(func: F) -> F:
         except RecursionError:
             emit_error(OptionError("input too deeply nested"), as_json)
             raise typer.Exit(2) from None
+        except MemoryError:
+            emit_error(ComputationLimitError(
+                "out of memory: the computation is too large for this machine "
+                "(use a smaller model, fewer samples or shorter brackets)"), as_json)
+            raise typer.Exit(2) from None
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            name = f" {literal(exc.filename)}" if getattr(exc, "filename", None) else ""
+            emit_error(OutputError(
+                f"cannot access{name}: {exc.strerror or type(exc).__name__}"), as_json)
+            raise typer.Exit(2) from None
 
     return wrapper  # type: ignore[return-value]
+
+
+# --- integer options with bounds ---------------------------------------------------
+def bounded_int(option: str, low: int, high: int, what: str = "") -> Callable[[Any], int]:
+    """A typer ``parser`` for a whole-number option between ``low`` and ``high``.
+
+    The text is read without ever reaching Python's 4300-digit conversion limit.
+    Not a whole number: a usage error; below ``low``: an
+    :class:`~nilpotent.errors.OptionError`; above ``high`` (what the tool can do in
+    bounded time and memory): a :class:`~nilpotent.errors.ComputationLimitError`
+    naming the limit and the option (``what`` may say more).
+    """
+
+    def parse(value: Any) -> int:
+        if isinstance(value, int) and not isinstance(value, bool):
+            number = value
+        else:
+            text = str(value).strip()
+            digits = text.lstrip("+-")
+            if not digits or not (digits.isascii() and digits.isdigit()) or len(text) - len(
+                    digits) > 1:
+                raise typer.BadParameter(f"{literal(value, 60)!r} is not a whole number")
+            if len(digits.lstrip("0")) > 30:
+                raise ComputationLimitError(
+                    f"{option} {literal(text, 40)}: far above the limit {high:,}{what}")
+            number = int(text)
+        if number < low:
+            raise OptionError(f"{option} must be >= {low}, got {number}")
+        if number > high:
+            raise ComputationLimitError(f"{option} {number:,} is above the limit {high:,}{what}")
+        return number
+
+    parse.__name__ = f"{option.lstrip('-').replace('-', '_')}_integer"
+    return parse
 
 
 def parse_int_pair(text: str, option: str, upper: int) -> tuple[int, int]:
@@ -194,25 +365,3 @@ def parse_float_list(text: str, option: str) -> list[float]:
     if not out:
         raise OptionError(f"{option}: expected at least one number")
     return out
-
-
-@contextlib.contextmanager
-def write_atomically(path: str | os.PathLike[str], suffix: str | None = None) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; move it into place only on success."""
-    target = Path(path)
-    if target.parent and not target.parent.exists():
-        raise OptionError(f"cannot write {target}: folder {target.parent} does not exist")
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{target.name}.", suffix=suffix or target.suffix, dir=target.parent or "."
-    )
-    os.close(fd)
-    tmp_path = Path(tmp)
-    mask = os.umask(0)
-    os.umask(mask)
-    try:
-        yield tmp_path
-        os.chmod(tmp_path, 0o666 & ~mask)  # mkstemp makes it private; the result is ordinary
-        os.replace(tmp_path, target)
-    finally:
-        if tmp_path.exists():
-            tmp_path.unlink()

@@ -1,6 +1,8 @@
 """Options shared by the bracket-motion commands (``simulate``, ``scaling``, ``sweep``).
 
-Only the option declarations live here: the library validates the values
+Only the option declarations live here (whole numbers are read by
+:func:`~nilpotent.cli.app.bounded_int`, within the CLI's limits); the library
+validates the values
 (:func:`nilpotent.numeric.signals.bracket_inputs`,
 :func:`nilpotent.simulation.compare_bracket_motion`, ...), so that the
 commands parse, call and print and never import one another.
@@ -11,6 +13,8 @@ from __future__ import annotations
 from typing import Annotated
 
 import typer
+
+from nilpotent.cli.app import MAX_PERIODS, bounded_int
 
 __all__ = ["BracketOpt", "OmegaOpt", "PeriodsOpt"]
 
@@ -26,5 +30,8 @@ OmegaOpt = Annotated[
     float, typer.Option("--omega", metavar="W", help="Angular frequency ω of the loop (> 0).")
 ]
 PeriodsOpt = Annotated[
-    int, typer.Option("--periods", metavar="K", help="Number of whole periods (>= 1).")
+    int,
+    typer.Option("--periods", metavar="K",
+                 help=f"Number of whole periods (1 to {MAX_PERIODS}).",
+                 parser=bounded_int("--periods", 1, MAX_PERIODS)),
 ]

@@ -7,16 +7,21 @@ from typing import Annotated, Any
 import typer
 
 from nilpotent.cli.app import (
+    MAX_BRACKET_LENGTH,
     AtOpt,
     JsonOpt,
     ModelArg,
     ParamOpt,
     app,
+    bounded_int,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_point_option,
+    print_heading,
     stdout_console,
+    work,
 )
 
 
@@ -56,7 +61,7 @@ def print_analysis(system, filtration) -> None:
         f"{n}={format_expression(v)}"
         for n, v in zip(system.coordinate_names, filtration.point, strict=True)
     )
-    console.print(f"[bold]{system.name}[/bold] at ({pt})")
+    print_heading(console, system.name, f" at ({literal(pt, 2000)})")
     verdict = "yes" if filtration.bracket_generating else (
         "NO: the brackets span only "
         f"{filtration.growth_vector[-1] if filtration.growth_vector else 0}"
@@ -102,7 +107,7 @@ def analyze_command(
         int | None,
         typer.Option(
             "--max-length",
-            min=1,
+            parser=bounded_int("--max-length", 1, MAX_BRACKET_LENGTH),
             help="Longest bracket length examined at the point (default: 2n+2, at least 12, "
             "within a budget of Hall words); matters only at singular points.",
         ),
@@ -124,8 +129,13 @@ def analyze_command(
 
     system = load_model_option(model, param)
     point = parse_point_option(at, system)
-    filtration = analyze(system, point, max_length=max_length)
-    locus = locus_of(system, filtration) if singular_locus else None
+    with work(f"analyze {system.name}"):
+        filtration = analyze(system, point, max_length=max_length)
+    if singular_locus:
+        with work(f"singular locus of {system.name}"):
+            locus = locus_of(system, filtration)
+    else:
+        locus = None
     if json_out:
         payload = analysis_payload(system, filtration)
         if locus is not None:

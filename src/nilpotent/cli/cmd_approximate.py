@@ -14,9 +14,11 @@ from nilpotent.cli.app import (
     app,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_point_option,
     stdout_console,
+    work,
 )
 from nilpotent.cli.cmd_analyze import analysis_payload
 from nilpotent.errors import OptionError
@@ -85,14 +87,19 @@ def approximate_command(
         raise OptionError("--json and --latex are exclusive: choose one output format")
     if method != "auto" and method not in METHODS:
         raise OptionError(
-            f"--method {method!r} is unknown; choose one of: auto, {', '.join(METHODS)}"
+            f"--method {literal(method, 60)!r} is unknown; "
+            f"choose one of: auto, {', '.join(METHODS)}"
         )
     system = load_model_option(model, param)
     point = parse_point_option(at, system)
-    approx = approximate(system, point, method=method)
+    with work(f"approximate {system.name}"):
+        approx = approximate(system, point, method=method)
     if json_out:
         emit_json(approximation_payload(system, approx))
     elif latex:
         print(approx.to_latex())
     else:
-        stdout_console().print(str(approx), markup=False, highlight=False)
+        text = str(approx)
+        if system.name != literal(system.name):
+            text = text.replace(system.name, literal(system.name))
+        stdout_console().print(text, markup=False, highlight=False)

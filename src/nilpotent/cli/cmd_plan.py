@@ -9,19 +9,24 @@ from typing import Annotated
 import typer
 
 from nilpotent.cli.app import (
+    MAX_ITERATIONS,
     JsonOpt,
     ModelArg,
     ParamOpt,
     PlotOpt,
     app,
+    bounded_int,
     check_plot_path,
+    check_writable,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_point_option,
+    print_heading,
     save_figure,
-    stderr_console,
     stdout_console,
+    work,
     write_atomically,
 )
 from nilpotent.errors import OptionError
@@ -49,17 +54,19 @@ AnchorOpt = Annotated[
                  help="Where to approximate: current (every iterate), goal, start, or auto."),
 ]
 MaxItOpt = Annotated[
-    int, typer.Option("--max-iterations", metavar="N", help="Most nilpotent steps (>= 1).")
+    int,
+    typer.Option("--max-iterations", metavar="N",
+                 help=f"Most nilpotent steps (1 to {MAX_ITERATIONS}).",
+                 parser=bounded_int("--max-iterations", 1, MAX_ITERATIONS)),
 ]
 
 
 def _check_outputs(plot: Path | None, animate: Path | None) -> None:
     check_plot_path(plot)
     if animate is not None and animate.suffix.lower() != ".gif":
-        raise OptionError(f"--animate {animate}: the animation is written as GIF (use .gif)")
-    for path, option in ((plot, "--plot"), (animate, "--animate")):
-        if path is not None and not path.parent.resolve().is_dir():
-            raise OptionError(f"{option} {path}: folder {path.parent} does not exist")
+        raise OptionError(
+            f"--animate {literal(animate)}: the animation is written as GIF (use .gif)")
+    check_writable(animate, "--animate")
 
 
 def _print_plan(result) -> None:
@@ -67,8 +74,9 @@ def _print_plan(result) -> None:
 
     console = stdout_console()
     sys = result.system
-    console.print(
-        f"[bold]{sys.name}[/bold]: {len(result.iterations)} iteration(s), "
+    print_heading(
+        console, sys.name,
+        f": {len(result.iterations)} iteration(s), "
         f"{len(result.segments)} segment(s), total time {result.duration:.4g}; "
         f"approximation {result.builder}, anchor {result.anchor}"
     )
@@ -116,24 +124,27 @@ def plan_command(
     if not (math.isfinite(tol) and tol > 0):
         raise OptionError(f"--tol must be a positive number, got {tol}")
     if anchor != "auto" and anchor not in ANCHORS:
-        raise OptionError(f"--anchor must be auto, {', '.join(ANCHORS)}; got {anchor!r}")
+        raise OptionError(
+            f"--anchor must be auto, {', '.join(ANCHORS)}; got {literal(anchor, 60)!r}")
     if max_iterations < 1:
         raise OptionError(f"--max-iterations must be >= 1, got {max_iterations}")
     _check_outputs(plot, animate)
     system = load_model_option(model, param)
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
-    if not json_out:
-        stderr_console().print(f"planning {system.name} ...")
-    result = plan(system, start, goal, tol, anchor=anchor, max_iterations=max_iterations)
+    with work(f"plan {system.name}"):
+        result = plan(system, start, goal, tol, anchor=anchor, max_iterations=max_iterations)
     if plot is not None:
         from nilpotent.viz.plan import plot_plan
 
-        save_figure(plot_plan(result), plot)
+        save_figure(plot_plan(result), plot, (system.name,))
     if animate is not None:
+        import matplotlib
+
         from nilpotent.viz.plan import animate_plan
 
-        with write_atomically(animate) as tmp:
+        # the plan's figures use no mathtext: a model name such as $\frac{a}$ stays literal
+        with write_atomically(animate) as tmp, matplotlib.rc_context({"text.parse_math": False}):
             animate_plan(result, tmp)
     if json_out:
         emit_json(result.to_json())

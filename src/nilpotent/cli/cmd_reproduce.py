@@ -7,7 +7,16 @@ from typing import Annotated
 
 import typer
 
-from nilpotent.cli.app import JsonOpt, app, cli_errors, emit_json, stderr_console, stdout_console
+from nilpotent.cli.app import (
+    JsonOpt,
+    app,
+    check_writable,
+    cli_errors,
+    emit_json,
+    literal,
+    stdout_console,
+    work,
+)
 
 
 @app.command("reproduce")
@@ -30,23 +39,14 @@ def reproduce_command(
     json_out: JsonOpt = False,
 ) -> None:
     """Run the paper's pipeline end to end and write an offline page with the audit."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
     from nilpotent.report.pipeline import reproduce
 
-    console = stderr_console()
-    with Progress(
-        TextColumn("[bold]reproduce[/bold]"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total} {task.description}"),
-        TimeElapsedColumn(),
-        console=console,
-        transient=json_out,
-    ) as bar:
-        task = bar.add_task("starting", total=1)
+    check_writable(out, "--out", folder=True)
+    with work("reproduce") as bar:
 
         def progress(step: str, done: int, total: int) -> None:
-            bar.update(task, description=step, completed=done, total=total)
+            bar.total = total
+            bar.update(done, detail=step)
 
         result = reproduce(out, quick=quick, progress=progress)
     if json_out:
@@ -54,10 +54,10 @@ def reproduce_command(
         return
     audit = result.audit
     con = stdout_console()
-    con.print(f"wrote {result.index}")
+    con.print(f"wrote {literal(result.index, 400)}")
     con.print(
         f"audit: {len(audit.entries)} statements, {len(audit.agreeing)} agree, "
-        f"{len(audit.differing)} differ ({result.audit_path})"
+        f"{len(audit.differing)} differ ({literal(result.audit_path, 400)})"
     )
     for entry in audit.differing:
         con.print(f"  differs  {entry.id}: {entry.explanation}", highlight=False, markup=False)

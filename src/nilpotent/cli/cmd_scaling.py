@@ -16,12 +16,15 @@ from nilpotent.cli.app import (
     check_plot_path,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_float_list,
     parse_int_pair,
     parse_point_option,
+    print_heading,
     save_figure,
     stdout_console,
+    work,
 )
 from nilpotent.cli.bracket_options import BracketOpt, OmegaOpt, PeriodsOpt
 
@@ -31,8 +34,9 @@ def print_scaling(study) -> None:
 
     console = stdout_console()
     i, j = study.bracket
-    console.print(
-        f"[bold]{study.system.name}[/bold]: bracket motion [X{i},X{j}], ω = {study.omega:g}, "
+    print_heading(
+        console, study.system.name,
+        f": bracket motion [X{i},X{j}], ω = {study.omega:g}, "
         f"{study.periods} period(s); errors max over time of |y − ŷ| in privileged coordinates"
     )
     table = Table()
@@ -83,13 +87,14 @@ def scaling_command(
     system = load_model_option(model, param)
     pair = parse_int_pair(bracket, "--bracket", system.m)
     point = parse_point_option(at, system)
-    study = scaling_study(system, pair, amps, omega=omega, periods=periods, point=point)
+    with work(f"scaling {system.name}"):
+        study = scaling_study(system, pair, amps, omega=omega, periods=periods, point=point)
     if plot is not None:
         fig, _ = study.plot()
-        save_figure(fig, plot)
+        save_figure(fig, plot, (system.name,))
     if json_out:
         emit_json(study.to_json())
         return
     print_scaling(study)
     if plot is not None:
-        stdout_console().print(f"figure written to {plot}")
+        stdout_console().print(f"figure written to {literal(plot)}")

@@ -16,11 +16,14 @@ from nilpotent.cli.app import (
     check_plot_path,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_int_pair,
     parse_point_option,
+    print_heading,
     save_figure,
     stdout_console,
+    work,
 )
 from nilpotent.cli.bracket_options import BracketOpt, OmegaOpt, PeriodsOpt
 
@@ -30,8 +33,9 @@ def print_comparison(comp) -> None:
 
     console = stdout_console()
     i, j = comp.bracket
-    console.print(
-        f"[bold]{comp.system.name}[/bold]: bracket motion [X{i},X{j}], A = {comp.amplitude:g}, "
+    print_heading(
+        console, comp.system.name,
+        f": bracket motion [X{i},X{j}], A = {comp.amplitude:g}, "
         f"ω = {comp.omega:g}, {comp.periods} period(s); approximation in "
         f"{comp.approximation.coordinates.method} privileged coordinates"
     )
@@ -76,15 +80,16 @@ def simulate_command(
     system = load_model_option(model, param)
     pair = parse_int_pair(bracket, "--bracket", system.m)
     point = parse_point_option(at, system)
-    comp = compare_bracket_motion(
-        system, pair, amplitude, omega=omega, periods=periods, point=point
-    )
+    with work(f"simulate {system.name}"):
+        comp = compare_bracket_motion(
+            system, pair, amplitude, omega=omega, periods=periods, point=point
+        )
     if plot is not None:
         fig, _ = comp.plot()
-        save_figure(fig, plot)
+        save_figure(fig, plot, (system.name,))
     if json_out:
         emit_json(comp.to_json())
         return
     print_comparison(comp)
     if plot is not None:
-        stdout_console().print(f"figure written to {plot}")
+        stdout_console().print(f"figure written to {literal(plot)}")

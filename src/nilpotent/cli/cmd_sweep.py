@@ -6,30 +6,42 @@ the amplitude and the start point (and, with ``--vary``, model parameters).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
 from nilpotent.cli.app import (
+    MAX_AMPLITUDE_COUNT,
+    MAX_CHUNK_SIZE,
+    MAX_PERIODS,
+    MAX_SAMPLES,
+    MAX_SEED,
+    MAX_SWEEP_MOTIONS,
     AtOpt,
     JsonOpt,
     ModelArg,
     ParamOpt,
     PlotOpt,
     app,
+    bounded_int,
     check_plot_path,
+    check_writable,
     cli_errors,
     emit_json,
+    literal,
     load_model_option,
     parse_float_list,
     parse_int_pair,
     parse_point_option,
+    print_heading,
     save_figure,
     stdout_console,
+    work,
     write_atomically,
 )
-from nilpotent.errors import OptionError
+from nilpotent.errors import ComputationLimitError, OptionError
 
 
 def parse_amplitudes(text: str) -> list[float]:
@@ -39,12 +51,18 @@ def parse_amplitudes(text: str) -> list[float]:
     if ":" in text:
         parts = [p.strip() for p in text.split(":")]
         if len(parts) != 3:
-            raise OptionError(f"--amplitudes expects A1:A2:N or A1,A2,..., got {text!r}")
+            raise OptionError(
+                f"--amplitudes expects A1:A2:N or A1,A2,..., got {literal(text, 80)!r}")
         low, high = (parse_float_list(p, "--amplitudes")[0] for p in parts[:2])
-        if not parts[2].isdigit():
-            raise OptionError(f"--amplitudes {text}: N must be a positive integer")
-        return list(amplitude_range(low, high, int(parts[2])))
-    return parse_float_list(text, "--amplitudes")
+        if not (parts[2].isascii() and parts[2].isdigit()):
+            raise OptionError(f"--amplitudes {literal(text, 80)}: N must be a positive integer")
+        count = bounded_int("--amplitudes N", 1, MAX_AMPLITUDE_COUNT)(parts[2])
+        return list(amplitude_range(low, high, count))
+    amps = parse_float_list(text, "--amplitudes")
+    if len(amps) > MAX_AMPLITUDE_COUNT:
+        raise ComputationLimitError(
+            f"--amplitudes: {len(amps):,} amplitudes, above the limit {MAX_AMPLITUDE_COUNT:,}")
+    return amps
 
 
 def _split_top_level(text: str) -> list[str]:
@@ -71,7 +89,7 @@ def parse_vary(items: list[str] | None) -> dict[str, list[Any]]:
         name, eq, values = item.partition("=")
         name = name.strip()
         if not eq or not name or not values.strip():
-            raise OptionError(f"--vary expects NAME=V1,V2,..., got {item!r}")
+            raise OptionError(f"--vary expects NAME=V1,V2,..., got {literal(item, 80)!r}")
         if name in out:
             raise OptionError(f"--vary {name} is given twice")
         pieces = _split_top_level(values)
@@ -81,6 +99,22 @@ def parse_vary(items: list[str] | None) -> dict[str, list[Any]]:
     return out
 
 
+def _check_vary_values(model: str, param: list[str] | None, varied: dict[str, list[Any]]
+                       ) -> None:
+    """Check each ``--vary`` value as ``--param`` would be (positive lengths, ...)."""
+    from nilpotent.core.expressions import format_expression
+    from nilpotent.errors import NilpotentError
+
+    for name, values in varied.items():
+        for value in values:
+            text = format_expression(value)
+            try:
+                load_model_option(model, [*(param or []), f"{name}={text}"])
+            except NilpotentError as exc:
+                raise OptionError(f"--vary {literal(name, 60)}={literal(text, 60)}: {exc}"
+                                  ) from None
+
+
 def print_sweep(result) -> None:
     """The summary for humans: statuses, error quantiles and fitted slopes per weight group."""
     from rich.table import Table
@@ -88,8 +122,9 @@ def print_sweep(result) -> None:
     console = stdout_console()
     par = result.parameters
     brackets = ", ".join(f"[X{i},X{j}]" for i, j in par.brackets)
-    console.print(
-        f"[bold]{par.model}[/bold]: {len(result)} bracket motions {brackets} "
+    print_heading(
+        console, par.model,
+        f": {len(result)} bracket motions {brackets} "
         f"({par.design} design, {par.periods} period(s); ω drops out), "
         f"{result.backend} on {result.engine}, {result.wall_time:.2f} s"
     )
@@ -146,6 +181,7 @@ def sweep_command(
     samples: Annotated[
         int,
         typer.Option("--samples", metavar="N",
+                     parser=bounded_int("--samples", 0, MAX_SAMPLES),
                      help="Grid: random start points (0: the start p only). Random: rows."),
     ] = 0,
     radius: Annotated[
@@ -153,7 +189,11 @@ def sweep_command(
         typer.Option("--radius", metavar="R",
                      help="Start points uniform in the ball of radius R round p."),
     ] = 0.0,
-    seed: Annotated[int, typer.Option("--seed", metavar="S", help="Random seed.")] = 0,
+    seed: Annotated[
+        int,
+        typer.Option("--seed", metavar="S", help="Random seed.",
+                     parser=bounded_int("--seed", 0, MAX_SEED)),
+    ] = 0,
     design: Annotated[
         str, typer.Option("--design", metavar="grid|random", help="Sampling design.")
     ] = "grid",
@@ -163,14 +203,19 @@ def sweep_command(
                      help="Sweep a model parameter over these values (repeatable)."),
     ] = None,
     periods: Annotated[
-        int, typer.Option("--periods", metavar="K", help="Whole periods of the loop (>= 1).")
+        int,
+        typer.Option("--periods", metavar="K",
+                     help=f"Whole periods of the loop (1 to {MAX_PERIODS}).",
+                     parser=bounded_int("--periods", 1, MAX_PERIODS)),
     ] = 1,
     rtol: Annotated[float, typer.Option("--rtol", help="Relative tolerance.")] = 1e-10,
     bound: Annotated[
         float, typer.Option("--bound", help="Stop (and report) a trajectory once |x_k| > bound.")
     ] = 1e6,
     chunk_size: Annotated[
-        int, typer.Option("--chunk-size", metavar="B", help="Trajectory pairs per chunk.")
+        int,
+        typer.Option("--chunk-size", metavar="B", help="Trajectory pairs per chunk.",
+                     parser=bounded_int("--chunk-size", 1, MAX_CHUNK_SIZE)),
     ] = 4096,
     dask: Annotated[
         str | None,
@@ -190,17 +235,24 @@ def sweep_command(
     from nilpotent.simulation import sweep
 
     amps = parse_amplitudes(amplitudes)
-    if out is not None and not (out.parent == Path("") or out.parent.is_dir()):
-        raise OptionError(f"--out {out}: folder {out.parent} does not exist")
+    if out is not None and out.suffix.lower() != ".csv":
+        raise OptionError(f"--out {literal(out)}: the rows are written as CSV (use .csv)")
+    check_writable(out, "--out")
     check_plot_path(plot)
     varied = parse_vary(vary)
     system = load_model_option(model, param)
+    _check_vary_values(model, param, varied)
     pairs = [parse_int_pair(b, "--bracket", system.m) for b in bracket]
     point = parse_point_option(at, system)
+    motions = len(amps) * len(pairs) * max(samples, 1) * math.prod(len(v) for v in varied.values())
+    if motions > MAX_SWEEP_MOTIONS:
+        raise ComputationLimitError(
+            f"the sweep asks for {motions:,} bracket motions (amplitudes x brackets x "
+            f"--samples x --vary values), above the limit {MAX_SWEEP_MOTIONS:,}; "
+            "lower --samples or the number of amplitudes"
+        )
 
-    from nilpotent.progress import progress as report
-
-    with report("bracket motions") as bar:
+    with work("bracket motions", total=motions) as bar:
 
         def progress(done: int, total: int) -> None:
             bar.total = total
@@ -216,12 +268,12 @@ def sweep_command(
             result.to_csv(tmp)
     if plot is not None:
         fig, _ = result.plot()
-        save_figure(fig, plot)
+        save_figure(fig, plot, (system.name,))
     if json_out:
         emit_json(result.to_json())
         return
     print_sweep(result)
     if out is not None:
-        stdout_console().print(f"{len(result)} rows written to {out}")
+        stdout_console().print(f"{len(result)} rows written to {literal(out)}")
     if plot is not None:
-        stdout_console().print(f"figure written to {plot}")
+        stdout_console().print(f"figure written to {literal(plot)}")

@@ -41,7 +41,7 @@ from collections.abc import Callable, Mapping, Sequence
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
-from nilpotent.errors import ExpressionError
+from nilpotent.errors import ComputationLimitError, ExpressionError
 
 __all__ = [
     "CONSTANTS",
@@ -64,6 +64,8 @@ MAX_DEPTH = 100
 MAX_EXPONENT = 100
 #: Largest accepted size, in bits, of an exact number produced by a power.
 MAX_BITS = 4096
+#: Most terms an expression may have once expanded (estimated before expanding).
+MAX_TERMS = 10_000
 
 #: Functions of the grammar: name → (sympy function, number of arguments).
 FUNCTIONS: dict[str, tuple[Callable[..., sp.Expr], int]] = {
@@ -320,6 +322,9 @@ class _Parser:
                 raise self.fail("complex value (expressions must be real)", node)
             if part.is_Float and not math.isfinite(float(part)):
                 raise self.fail("number too large (outside the range of a double)", node)
+            if part.is_Rational and max(int(part.p).bit_length(),
+                                        int(part.q).bit_length()) > MAX_BITS:
+                raise self.fail(f"exact number too large (more than {MAX_BITS} bits)", node)
         return value
 
 
@@ -397,10 +402,51 @@ def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "
         raise ExpressionError(f"{prefix}cannot parse {_shorten(text)}: {exc}") from None
     parser = _Parser(text.strip(), names, where)
     try:
-        return parser.build(tree.body, 1)
+        result = parser.build(tree.body, 1)
     except RecursionError:
         raise ExpressionError(
             f"{prefix}expression nested too deeply: {_shorten(text)}") from None
+    terms = expanded_terms(result)
+    if terms > MAX_TERMS:
+        raise ComputationLimitError(
+            f"{prefix}{_shorten(text)} would expand to about {terms:.3g} terms, above the "
+            f"limit {MAX_TERMS:,} (nilpotent.core.expressions.MAX_TERMS); brackets and Taylor "
+            "expansions expand it: write the system with fewer or smaller powers")
+    return result
+
+
+def expanded_terms(expr: sp.Basic) -> int:
+    """An upper estimate of the number of terms of ``expr`` once expanded, computed without
+    expanding: sums add, products multiply, ``(a_1 + ... + a_k)**e`` gives the
+    number of monomials of degree ``e`` in ``k`` terms, ``C(k + e - 1, e)``; a function
+    counts as one term, but its argument's count is kept (derivatives bring it out).
+    The result is capped just above :data:`MAX_TERMS` times a large margin."""
+    cap = MAX_TERMS * 1000
+    memo: dict[sp.Basic, int] = {}
+
+    def count(e: sp.Basic) -> int:
+        if e in memo:
+            return memo[e]
+        if e.is_Add:
+            value = sum(count(a) for a in e.args)
+        elif e.is_Mul:
+            value = math.prod(count(a) for a in e.args)
+        elif e.is_Pow:
+            k = count(e.base)
+            x = e.exp
+            if x.is_Integer and k > 1:
+                n = abs(int(x))
+                value = math.comb(k + n - 1, n) if n < 10_000 else cap
+            else:
+                value = max(k, count(x))
+        elif e.args:
+            value = max(1, *(count(a) for a in e.args))
+        else:
+            value = 1
+        memo[e] = value = min(value, cap)
+        return value
+
+    return count(expr)
 
 
 # --- printing ----------------------------------------------------------------
@@ -473,7 +519,14 @@ def format_expression(expr: sp.Basic | int | float) -> str:
     if not isinstance(expr, sp.Basic):
         raise ExpressionError(f"cannot write {expr!r} in the expression grammar")
     _check_printable(expr)
-    return _PRINTER.doprint(expr)
+    try:
+        return _PRINTER.doprint(expr)
+    except ValueError as exc:  # an integer past Python's 4300-digit int-to-str limit
+        if "digits" not in str(exc):
+            raise
+        raise ComputationLimitError(
+            "an exact number of the result has more than 4300 decimal digits: too large to "
+            "print (use decimal values or smaller exact numbers)") from None
 
 
 # --- numeric values of constants ----------------------------------------------

@@ -565,6 +565,8 @@ def analyze(
     n, m = sys.n, sys.m
     generic = generic_growth_vector(sys, p)
     final = generic[-1]
+    if max_length is not None:
+        check_hall_budget(m, max_length)
     limit = max_length if max_length is not None else default_max_length(n, m)
     limit = max(limit, len(generic))
     span = _ExactSpan(n)
@@ -631,6 +633,37 @@ def default_max_length(n: int, m: int) -> int:
         total += count
         length += 1
     return length
+
+
+def check_hall_budget(m: int, max_length: int) -> None:
+    """Refuse an explicit ``max_length`` whose Hall words exceed :data:`HALL_WORD_BUDGET`.
+
+    Raises
+    ------
+    ComputationLimitError
+        Naming the number of Hall words, the budget and the option (``--max-length``).
+    """
+    total = 0
+    for length in range(1, max_length + 1):
+        total += _witt(m, length)
+        if total > HALL_WORD_BUDGET:
+            raise ComputationLimitError(
+                f"--max-length {max_length} with {m} fields means more than "
+                f"{HALL_WORD_BUDGET:,} Hall words (the budget HALL_WORD_BUDGET; already "
+                f"{total:,} up to length {length}); give a --max-length of at most "
+                f"{default_max_length_for_budget(m)}"
+            )
+
+
+def default_max_length_for_budget(m: int) -> int:
+    """The longest bracket length whose Hall words fit in :data:`HALL_WORD_BUDGET`."""
+    total = length = 0
+    while True:
+        count = _witt(m, length + 1)
+        if total + count > HALL_WORD_BUDGET:
+            return max(length, 1)
+        total += count
+        length += 1
 
 
 def _witt(m: int, k: int) -> int:

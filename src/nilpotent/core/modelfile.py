@@ -35,6 +35,7 @@ from __future__ import annotations
 import json
 import keyword
 import math
+import stat
 import tomllib
 import unicodedata
 from collections.abc import Mapping
@@ -44,13 +45,15 @@ from typing import Any
 import sympy as sp
 
 from nilpotent.core.expressions import (
+    MAX_BITS,
     RESERVED_NAMES,
     format_expression,
     parse_expression,
     real_value,
 )
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import ExpressionError, ModelError
+from nilpotent.errors import ComputationLimitError, ExpressionError, ModelError
+from nilpotent.strict_json import json_text
 
 __all__ = [
     "ALLOWED_KEYS",
@@ -66,6 +69,65 @@ ALLOWED_KEYS: tuple[str, ...] = ("name", "description", "coordinates", "paramete
 #: File suffixes understood by :func:`load_model_file` and :func:`dump_model_file`.
 SUFFIXES: tuple[str, ...] = (".toml", ".json")
 
+#: Largest model file read, in bytes.
+MAX_FILE_BYTES = 1_000_000
+#: Most coordinates of a model file.
+MAX_COORDINATES = 40
+#: Most control fields of a model file.
+MAX_FIELDS = 40
+#: Most parameters of a model file.
+MAX_PARAMETERS = 100
+#: Longest coordinate or parameter name, in characters.
+MAX_NAME_LENGTH = 64
+#: Longest model name and description, in characters.
+MAX_TITLE_LENGTH = 200
+MAX_DESCRIPTION_LENGTH = 2000
+#: Most decimal digits of an integer written as a number (not as text) in a model file.
+MAX_INT_DIGITS = 1000
+
+
+def _limit(source: str, what: str, count: int, limit: int, name: str) -> None:
+    if count > limit:
+        raise ComputationLimitError(
+            f"{source}: {count:,} {what}, above the limit {limit:,} of a model file "
+            f"(nilpotent.core.modelfile.{name})"
+        )
+
+
+def name_skeleton(name: str) -> str:
+    """The look-alike skeleton of a name (after Unicode TR39): compatibility forms and
+    accents removed, each character replaced by the ASCII character it looks like
+    (Cyrillic ``х`` → ``x``), so that two names with the same skeleton read the same."""
+    from confusable_homoglyphs import confusables
+
+    decomposed = unicodedata.normalize("NFKD", name)
+    out = []
+    for ch in decomposed:
+        if unicodedata.combining(ch):
+            continue
+        if ch.isascii():
+            out.append(ch)
+            continue
+        found = confusables.is_confusable(ch, greedy=True, preferred_aliases=["latin"]) or []
+        ascii_like = [g["c"] for item in found for g in item["homoglyphs"]
+                      if g["c"].isascii() and g["c"].isalnum()]
+        out.append(ascii_like[0] if ascii_like else ch)
+    return "".join(out)
+
+
+def _check_lookalikes(names: list[str], source: str) -> None:
+    """Refuse two names that differ only by look-alike characters (``x`` and Cyrillic ``х``)."""
+    seen: dict[str, str] = {}
+    for name in names:
+        key = name_skeleton(name)
+        other = seen.get(key)
+        if other is not None and other != name:
+            raise ModelError(
+                f"{source}: the names {other!r} and {name!r} look alike (they differ only by "
+                f"look-alike characters: {other!a} vs {name!a}); rename one"
+            )
+        seen[key] = name
+
 
 def _show(value: object) -> str:
     text = repr(value)
@@ -78,6 +140,11 @@ def _check_name(name: object, what: str, source: str) -> str:
         raise ModelError(f"{source}: {what} must be a string, got {_show(name)}")
     if not name:
         raise ModelError(f"{source}: {what} is empty")
+    if len(name) > MAX_NAME_LENGTH:
+        raise ComputationLimitError(
+            f"{source}: {what} {_show(name)} has {len(name):,} characters, above the limit "
+            f"{MAX_NAME_LENGTH} of a name (nilpotent.core.modelfile.MAX_NAME_LENGTH)"
+        )
     if not name.isidentifier() or unicodedata.normalize("NFKC", name) != name:
         raise ModelError(
             f"{source}: {what} {name!r} is not a valid name (letters, digits and '_', "
@@ -95,6 +162,14 @@ def _check_name(name: object, what: str, source: str) -> str:
     return name
 
 
+def _integer(value: int, where: str) -> sp.Expr:
+    if value.bit_length() > MAX_BITS:
+        raise ModelError(
+            f"{where}: integer of {value.bit_length():,} bits, too large (at most {MAX_BITS} "
+            "bits)")
+    return sp.Integer(value)
+
+
 def _parameter_value(value: object, where: str) -> sp.Expr:
     if isinstance(value, bool) or not isinstance(value, int | float | str):
         raise ModelError(
@@ -102,7 +177,7 @@ def _parameter_value(value: object, where: str) -> sp.Expr:
             f"got {_show(value)}"
         )
     if isinstance(value, int):
-        return sp.Integer(value)
+        return _integer(value, where)
     if isinstance(value, float):
         if not math.isfinite(value):
             raise ModelError(f"{where}: parameter value must be finite, got {value!r}")
@@ -121,7 +196,7 @@ def _component(value: object, names: Mapping[str, sp.Symbol], where: str) -> sp.
             f"{where}: a component must be an expression (text) or a number, got {_show(value)}"
         )
     if isinstance(value, int):
-        return sp.Integer(value)
+        return _integer(value, where)
     if isinstance(value, float):
         if not math.isfinite(value):
             raise ModelError(f"{where}: component must be finite, got {value!r}")
@@ -176,9 +251,12 @@ def system_from_dict(
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name.strip():
         raise ModelError(f"{source}: name must be a non-empty string, got {_show(name)}")
+    _limit(source, "characters in the name", len(name), MAX_TITLE_LENGTH, "MAX_TITLE_LENGTH")
     description = data.get("description", "")
     if not isinstance(description, str):
         raise ModelError(f"{source}: description must be a string, got {_show(description)}")
+    _limit(source, "characters in the description", len(description), MAX_DESCRIPTION_LENGTH,
+           "MAX_DESCRIPTION_LENGTH")
 
     # coordinates
     if "coordinates" not in data:
@@ -188,6 +266,7 @@ def system_from_dict(
         raise ModelError(
             f"{source}: coordinates must be a non-empty list of names, got {_show(raw_coords)}"
         )
+    _limit(source, "coordinates", len(raw_coords), MAX_COORDINATES, "MAX_COORDINATES")
     coord_names = [
         _check_name(c, f"coordinates[{i}]", source) for i, c in enumerate(raw_coords)
     ]
@@ -204,6 +283,8 @@ def system_from_dict(
         raise ModelError(
             f"{source}: parameters must be a table of NAME = value, got {_show(raw_params)}"
         )
+    _limit(source, "parameters", len(raw_params), MAX_PARAMETERS, "MAX_PARAMETERS")
+    _check_lookalikes([*coord_names, *(k for k in raw_params if isinstance(k, str))], source)
     params: dict[str, sp.Expr] = {}
     for key, value in raw_params.items():
         pname = _check_name(key, "parameter name", source)
@@ -219,6 +300,7 @@ def system_from_dict(
         raise ModelError(
             f"{source}: fields must be a non-empty list of tables, got {_show(raw_fields)}"
         )
+    _limit(source, "fields", len(raw_fields), MAX_FIELDS, "MAX_FIELDS")
     names: dict[str, sp.Symbol] = {c: s for c, s in zip(coord_names, coords, strict=True)}
     names.update({p: sp.Symbol(p) for p in params})
     fields = []
@@ -310,23 +392,19 @@ def load_model_file(path: str | Path) -> ControlSystem:
         A component outside the expression grammar.
     """
     path = Path(path)
+    text = _read_model_text(path)
     suffix = _suffix(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ModelError(f"{path}: model file not found") from None
-    except UnicodeDecodeError as exc:
-        raise ModelError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read the model file ({exc.strerror})") from None
     if suffix == ".toml":
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise ModelError(f"{path}: TOML syntax error: {exc}") from None
+        except ValueError as exc:  # e.g. an integer past Python's 4300-digit limit
+            raise ModelError(f"{path}: TOML value not readable: {_show(str(exc))}") from None
     else:
         try:
-            data = json.loads(text)
+            data = json.loads(text, object_pairs_hook=_no_duplicates(path),
+                              parse_int=_json_int(path))
         except json.JSONDecodeError as exc:
             raise ModelError(
                 f"{path}: JSON syntax error: {exc.msg} (line {exc.lineno}, column {exc.colno})"
@@ -334,6 +412,77 @@ def load_model_file(path: str | Path) -> ControlSystem:
         except RecursionError:
             raise ModelError(f"{path}: JSON nested too deeply") from None
     return system_from_dict(data, str(path), default_name=path.stem)
+
+
+def _describe_kind(mode: int) -> str | None:
+    """What a non-regular file is, in words (None for a regular file)."""
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "a folder"
+    if stat.S_ISFIFO(mode):
+        return "a named pipe (FIFO)"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "a device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def _read_model_text(path: Path) -> str:
+    """The text of a model file: a regular file of at most :data:`MAX_FILE_BYTES`, UTF-8,
+    a leading byte-order mark skipped. Never blocks on a FIFO or reads a device."""
+    try:
+        info = path.stat()
+    except FileNotFoundError:
+        raise ModelError(f"{path}: model file not found") from None
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the model file ({exc.strerror})") from None
+    kind = _describe_kind(info.st_mode)
+    if kind is not None:
+        raise ModelError(f"{path} is {kind}, not a model file (give a .toml or .json file)")
+    _limit(str(path), "bytes", info.st_size, MAX_FILE_BYTES, "MAX_FILE_BYTES")
+    try:
+        with path.open("rb") as handle:
+            raw = handle.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise ModelError(f"{path}: cannot read the model file ({exc.strerror})") from None
+    _limit(str(path), "bytes", len(raw), MAX_FILE_BYTES, "MAX_FILE_BYTES")
+    if raw.startswith(b"\xef\xbb\xbf"):
+        raw = raw[3:]  # a UTF-8 byte-order mark (some Windows editors write one): read past it
+    elif raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise ModelError(f"{path}: UTF-16 text (byte-order mark); save the file as UTF-8")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ModelError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+
+
+def _no_duplicates(path: Path):
+    def hook(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for key, value in pairs:
+            if key in out:
+                raise ModelError(
+                    f"{path}: duplicate key {_show(key)} in one JSON object (each key once; "
+                    "TOML refuses this too)"
+                )
+            out[key] = value
+        return out
+
+    return hook
+
+
+def _json_int(path: Path):
+    def parse(text: str) -> int:
+        if len(text.lstrip("-")) > MAX_INT_DIGITS:
+            raise ModelError(
+                f"{path}: an integer of {len(text.lstrip('-')):,} digits, too long (at most "
+                f"{MAX_INT_DIGITS})"
+            )
+        return int(text)
+
+    return parse
 
 
 # --- writing -------------------------------------------------------------------------
@@ -403,7 +552,7 @@ def dump_model_file(sys: ControlSystem, path: str | Path) -> None:
     path = Path(path)
     suffix = _suffix(path)
     data = system_to_dict(sys)
-    text = _to_toml(data) if suffix == ".toml" else json.dumps(data, indent=2) + "\n"
+    text = _to_toml(data) if suffix == ".toml" else json_text(data)
     try:
         path.write_text(text, encoding="utf-8")
     except OSError as exc:

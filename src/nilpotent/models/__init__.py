@@ -267,12 +267,12 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
     if spec.partition(":")[0].strip() in MODELS:
         return get_model(spec, params)
     path = Path(spec)
-    if path.suffix.lower() not in _MODEL_FILE_SUFFIXES and not path.is_file():
+    if path.suffix.lower() not in _MODEL_FILE_SUFFIXES and not path.exists():
         raise ModelError(
             f"unknown model {spec!r}: not a built-in (known models: {_known()}) "
             "and not a model file (.toml or .json)"
         )
-    if not path.is_file():
+    if not path.exists():
         raise ModelError(f"model file {spec!r} not found")
     from nilpotent.core.modelfile import load_model_file  # lazy: written alongside
 

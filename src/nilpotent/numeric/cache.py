@@ -5,7 +5,15 @@ files (numba can cache only code that lives in a file) into one directory:
 
 1. ``$NILPOTENT_CACHE`` when set;
 2. else ``$XDG_CACHE_HOME/nilpotent``, or ``~/.cache/nilpotent``;
-3. else (not writable) a per-user folder in the system temporary directory.
+3. else (none usable) a private folder made for this process only
+   (:func:`tempfile.mkdtemp`, removed at exit): no disk cache between runs.
+
+A cached module is code that runs as the user, so a folder is used only if it is
+safe (:func:`safe_folder`): created with mode 0700, owned by the user, not
+writable by group or others (a folder that fails this is never used nor
+repaired: files may have been planted while it was open). And a file is
+imported only if its content is byte for byte what this process generated
+(SHA-256 compared); otherwise it is rewritten first.
 
 A file's name carries a hash of everything it was generated from, so a file
 is never stale: a change of expressions, generator or library version gives a
@@ -15,38 +23,92 @@ processes never see half a file.
 
 from __future__ import annotations
 
+import atexit
+import contextlib
 import hashlib
 import importlib.util
 import os
+import shutil
+import stat
 import sys
 import tempfile
+import warnings
+from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
 #: Bumped whenever the code generators change what they write.
 GENERATOR_VERSION = "2"
 
+_private: dict[str, Path] = {}  # the private folder and the folder already warned about
+
+
+def safe_folder(folder: Path) -> str | None:
+    """Why ``folder`` must not hold code to import (``None``: it is safe).
+
+    Safe means: an existing directory (not a symbolic link), owned by the current
+    user, not writable by group or others.
+    """
+    try:
+        info = os.lstat(folder)
+    except OSError as exc:
+        return f"cannot inspect it ({exc.strerror})"
+    if stat.S_ISLNK(info.st_mode):
+        return "it is a symbolic link"
+    if not stat.S_ISDIR(info.st_mode):
+        return "it is not a folder"
+    if hasattr(os, "getuid") and info.st_uid != os.getuid():
+        return f"it is owned by another user (uid {info.st_uid})"
+    if info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return f"it is writable by others (mode {stat.S_IMODE(info.st_mode):o})"
+    return None
+
+
+def _usable(folder: Path) -> bool:
+    try:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        folder.mkdir(mode=0o700, exist_ok=True)
+    except OSError:
+        return False
+    return safe_folder(folder) is None and os.access(folder, os.W_OK | os.X_OK)
+
+
+def _private_folder() -> Path:
+    """A folder for this process only (0700, random name), removed at exit."""
+    folder = _private.get("dir")
+    if folder is None or not folder.is_dir():
+        folder = Path(tempfile.mkdtemp(prefix="nilpotent-generated-"))
+        _private["dir"] = folder
+        atexit.register(shutil.rmtree, folder, True)
+    return folder
+
 
 def cache_dir() -> Path:
-    """The directory of generated modules (created when missing)."""
-    candidates: list[Path] = []
+    """The directory of generated modules (created when missing, mode 0700).
+
+    ``$NILPOTENT_CACHE``, else the XDG cache folder; a folder that is not safe
+    (:func:`safe_folder`) is skipped, and then this process writes its modules
+    to a private temporary folder instead (no cache between runs).
+    """
     env = os.environ.get("NILPOTENT_CACHE")
     if env:
-        candidates.append(Path(env))
+        folder = Path(env)
     else:
         xdg = os.environ.get("XDG_CACHE_HOME")
         base = Path(xdg) if xdg else Path.home() / ".cache"
-        candidates.append(base / "nilpotent")
-    user = os.environ.get("USER") or str(os.getuid() if hasattr(os, "getuid") else "user")
-    candidates.append(Path(tempfile.gettempdir()) / f"nilpotent-cache-{user}")
-    for folder in candidates:
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError:
-            continue
-        if os.access(folder, os.W_OK):
-            return folder
-    raise OSError("no writable cache directory (set NILPOTENT_CACHE to a writable folder)")
+        folder = base / "nilpotent"
+    if _usable(folder):
+        return folder
+    if "warned" not in _private:
+        _private["warned"] = folder
+        why = safe_folder(folder) or "it cannot be created or written"
+        warnings.warn(
+            f"nilpotent: not using the code cache {folder}: {why}; generated code goes to a "
+            "private temporary folder (no cache between runs). Fix: chmod 700 the folder, "
+            "or set NILPOTENT_CACHE to a folder of your own",
+            RuntimeWarning, stacklevel=2,
+        )
+    return _private_folder()
 
 
 def content_key(*parts: str) -> str:
@@ -58,29 +120,66 @@ def content_key(*parts: str) -> str:
     return digest.hexdigest()[:20]
 
 
-def load_generated_module(stem: str, source: str | None, make_source=None) -> ModuleType:
-    """Import the generated module ``<cache>/<stem>.py``, writing it first if missing.
+def _matches(path: Path, data: bytes) -> bool:
+    """Whether ``path`` is a regular file (not a link) holding exactly ``data``."""
+    try:
+        info = os.lstat(path)
+        if not stat.S_ISREG(info.st_mode) or info.st_size != len(data):
+            return False
+        if hasattr(os, "getuid") and info.st_uid != os.getuid():
+            return False
+        with path.open("rb") as handle:
+            found = handle.read(len(data) + 1)
+    except OSError:
+        return False
+    return hashlib.sha256(found).digest() == hashlib.sha256(data).digest()
+
+
+def _write(folder: Path, path: Path, stem: str, data: bytes) -> None:
+    fd, tmp = tempfile.mkstemp(prefix=f".{stem}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def load_generated_module(
+    stem: str, source: str | None, make_source: Callable[[], str] | None = None
+) -> ModuleType:
+    """Import the generated module ``<cache>/<stem>.py``, writing it first if needed.
+
+    The text is generated in this process every time (``source`` or
+    ``make_source()``) and the file is imported only if it holds exactly that text
+    (SHA-256); a missing or different file (stale, damaged, planted) is rewritten
+    first. A file that cannot be made right is never imported: the module is then
+    written to this process's private folder.
 
     Parameters
     ----------
     stem:
         File name without ``.py``; must already contain the content hash.
     source, make_source:
-        The module text, or a callable producing it (called only when the
-        file does not exist yet, so cached runs skip code generation).
+        The module text, or a callable producing it.
     """
-    folder = cache_dir()
-    path = folder / f"{stem}.py"
-    if not path.exists():
-        text = source if source is not None else make_source()
-        fd, tmp = tempfile.mkstemp(prefix=f".{stem}.", suffix=".tmp", dir=folder)
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
     name = f"nilpotent_generated.{stem}"
     module = sys.modules.get(name)
     if module is not None:
         return module
+    text = source if source is not None else make_source()  # type: ignore[misc]
+    data = text.encode("utf-8")
+    folder = cache_dir()
+    path = folder / f"{stem}.py"
+    if not _matches(path, data):
+        with contextlib.suppress(OSError):
+            _write(folder, path, stem, data)
+        if not _matches(path, data):
+            folder = _private_folder()
+            path = folder / f"{stem}.py"
+            _write(folder, path, stem, data)
     spec = importlib.util.spec_from_file_location(name, path)
     if spec is None or spec.loader is None:  # pragma: no cover - importlib contract
         raise ImportError(f"cannot load generated module {path}")

@@ -49,6 +49,7 @@ import numpy as np
 import sympy as sp
 
 from nilpotent.errors import OptionError
+from nilpotent.outputs import remove_stale_temporaries, temporary_prefix
 
 __all__ = [
     "DEFAULT_OUT",
@@ -142,9 +143,15 @@ def _check_target(target: Path) -> None:
         )
 
 
-def _move_into_place(tmp: Path, target: Path) -> None:
+def _move_into_place(tmp: Path, target: Path, existed: bool = True) -> None:
+    if target.exists() and not existed:
+        raise OptionError(
+            f"--out {target} was created by something else while the reproduction ran; it is "
+            "left untouched (run again, or choose another folder)"
+        )
+    _check_target(target)  # again: what is there now must still be a previous reproduction
     if target.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
+        old = Path(tempfile.mkdtemp(prefix=temporary_prefix(target, "old"), dir=target.parent))
         os.replace(target, old / target.name)
         os.replace(tmp, target)
         shutil.rmtree(old, ignore_errors=True)
@@ -160,7 +167,9 @@ def _fmt(value: Any) -> str:
 
 
 def _write_json(path: Path, obj: Any) -> Path:
-    path.write_text(json.dumps(obj, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    from nilpotent.strict_json import json_text
+
+    path.write_text(json_text(obj), encoding="utf-8")
     return path
 
 
@@ -237,14 +246,16 @@ def reproduce(
     """
     target = Path(out_dir).resolve()
     _check_target(target)
+    existed = target.exists()
+    remove_stale_temporaries(target)  # left by runs killed outright
     settings = QUICK if quick else FULL
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp.", dir=target.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=temporary_prefix(target), dir=target.parent))
     mask = os.umask(0)
     os.umask(mask)
     os.chmod(tmp, 0o777 & ~mask)  # mkdtemp makes it private; the result is an ordinary folder
     try:
         result = _run(tmp, settings, quick, progress)
-        _move_into_place(tmp, target)
+        _move_into_place(tmp, target, existed)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
