@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from nilpotent.core.expressions import real_value
 from nilpotent.core.points import format_point, parse_param_assignments, parse_point
+from nilpotent.core.spans import exact_decimals
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ModelError, PointError
 
@@ -25,7 +26,10 @@ UNICYCLE = ControlSystem("unicycle", (x, y, th), ((sp.cos(th), sp.sin(th), 0), (
         ("x=1/2,y=-2", (sp.Rational(1, 2), -2, 0)),
         (" y = sqrt(2) , theta = E ", (0, sp.sqrt(2), sp.E)),
         ("theta=atan2(1, 1)", (0, 0, sp.pi / 4)),  # the comma inside the call belongs to it
-        ("x=0.25", (sp.Float(0.25), 0, 0)),
+        # decimals are the exact rationals they denote, every digit counted
+        ("x=0.25", (sp.Rational(1, 4), 0, 0)),
+        ("x=0.1000000000000000000001", (sp.Rational(10**21 + 1, 10**22), 0, 0)),
+        ("x=1e-300", (sp.Rational(1, 10**300), 0, 0)),
     ],
 )
 def test_parse_point(text, expected):
@@ -114,7 +118,8 @@ _values = st.one_of(
 @given(st.tuples(_values, _values, _values))
 def test_format_then_parse_point_round_trips(point):
     text = ",".join(f"{k}={v}" for k, v in format_point(UNICYCLE, point).items())
-    assert parse_point(text, UNICYCLE) == point
+    # floats come back as the exact rationals of their shortest decimals
+    assert parse_point(text, UNICYCLE) == tuple(exact_decimals(v) for v in point)
 
 
 @settings(max_examples=300, deadline=2000)

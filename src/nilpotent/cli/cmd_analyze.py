@@ -26,28 +26,8 @@ from nilpotent.cli.app import (
 
 
 def analysis_payload(system, filtration) -> dict[str, Any]:
-    """The ``nilpotent/analysis@1`` JSON object of a filtration (INTERFACE.md)."""
-    from nilpotent.core.brackets import format_word
-    from nilpotent.core.expressions import format_expression
-    from nilpotent.core.points import format_point
-
-    return {
-        "schema": "nilpotent/analysis@1",
-        "model": system.name,
-        "coordinates": list(system.coordinate_names),
-        "parameters": {k: format_expression(v) for k, v in system.parameters},
-        "point": format_point(system, filtration.point),
-        "bracket_generating": filtration.bracket_generating,
-        "growth_vector": list(filtration.growth_vector),
-        "weights": list(filtration.weights),
-        "step": filtration.step,
-        "regular": filtration.regular,
-        "generic_growth_vector": list(filtration.generic_growth_vector),
-        "exact": filtration.exact,
-        "max_length": filtration.max_length,
-        "frame": [format_word(w) for w in filtration.frame],
-        "frame_values": [[format_expression(v) for v in col] for col in filtration.frame_values],
-    }
+    """The ``nilpotent/analysis@1`` JSON object of a filtration (``Filtration.to_json``)."""
+    return filtration.to_json()
 
 
 def print_analysis(system, filtration) -> None:
@@ -62,24 +42,41 @@ def print_analysis(system, filtration) -> None:
         for n, v in zip(system.coordinate_names, filtration.point, strict=True)
     )
     print_heading(console, system.name, f" at ({literal(pt, 2000)})")
-    verdict = "yes" if filtration.bracket_generating else (
-        "NO: the brackets span only "
-        f"{filtration.growth_vector[-1] if filtration.growth_vector else 0}"
-        f" of {system.n} dimensions"
-    )
-    if not filtration.bracket_generating and filtration.generic_growth_vector[-1] == system.n:
-        verdict += (
-            f" at the point with brackets of length <= {filtration.max_length}, while they "
-            "span everything at nearby points (a longer bracket may still add a direction: "
-            "--max-length)"
+    reached = filtration.growth_vector[-1] if filtration.growth_vector else 0
+    if filtration.bracket_generating:
+        verdict = "yes"
+    elif filtration.bracket_generating is False and filtration.invariant_hypersurface is not None:
+        verdict = (
+            f"NO at the point: the hypersurface {filtration.invariant_hypersurface} = 0 through "
+            "it is invariant under every field (the brackets span everything nearby, never on it)"
         )
-    console.print(f"bracket generating: {verdict}")
+    elif filtration.bracket_generating is False:
+        verdict = (
+            f"NO: the brackets span only {reached} of {system.n} dimensions (also at every "
+            "nearby point)"
+        )
+    else:
+        verdict = (
+            f"UNDETERMINED: brackets of length <= {filtration.max_length} span {reached} of "
+            f"{system.n} dimensions at the point"
+        )
+    console.print(f"bracket generating: {verdict}", markup=False)
+    und = filtration.undetermined
+    if und is not None:
+        console.print(
+            f"undetermined: {und['reason']} (ball precision reached: {und['precision_bits']} "
+            f"bits; search further with --max-length)",
+            markup=False,
+        )
     console.print(f"growth vector: ({', '.join(map(str, filtration.growth_vector))})")
     console.print(f"weights: ({', '.join(map(str, filtration.weights))})   step: {filtration.step}")
-    regular = "regular" if filtration.regular else (
-        "SINGULAR (generic growth vector nearby: "
-        f"({', '.join(map(str, filtration.generic_growth_vector))}))"
-    )
+    nearby = ", ".join(map(str, filtration.generic_growth_vector))
+    if filtration.regular is None:
+        regular = f"UNDETERMINED (generic growth vector nearby: ({nearby}))"
+    elif filtration.regular:
+        regular = "regular"
+    else:
+        regular = f"SINGULAR (generic growth vector nearby: ({nearby}))"
     console.print(f"point: {regular}")
     table = Table(title="adapted frame Y_j (value at the point)")
     table.add_column("j")
@@ -108,24 +105,26 @@ def analyze_command(
         typer.Option(
             "--max-length",
             parser=bounded_int("--max-length", 1, MAX_BRACKET_LENGTH),
-            help="Longest bracket length examined at the point (default: 2n+2, at least 12, "
-            "within a budget of Hall words); matters only at singular points.",
+            help="Longest bracket length examined at the point (default: automatic, from "
+            "max(2n+2, 12) raised while the Hall words fit a budget); matters only at "
+            "singular points.",
         ),
     ] = None,
     singular_locus: Annotated[
         bool,
         typer.Option(
             "--singular-locus",
-            help="Also give the singular locus: the determinant of the adapted frame "
-            "(only where the frame is square).",
+            help="Also give the singular locus: the common zeros of the determinants of "
+            "the adapted frames with the generic weights (simplified).",
         ),
     ] = False,
     json_out: JsonOpt = False,
 ) -> None:
     """Growth vector, weights, step, adapted frame and regular/singular verdict at a point."""
+    from nilpotent.core.brackets import format_word
     from nilpotent.core.expressions import format_expression
     from nilpotent.core.filtration import analyze
-    from nilpotent.core.filtration import singular_locus as locus_of
+    from nilpotent.core.singular import singular_set
 
     system = load_model_option(model, param)
     point = parse_point_option(at, system)
@@ -133,15 +132,21 @@ def analyze_command(
         filtration = analyze(system, point, max_length=max_length)
     if singular_locus:
         with work(f"singular locus of {system.name}"):
-            locus = locus_of(system, filtration)
+            locus = singular_set(system, filtration.generic_growth_vector)
     else:
         locus = None
     if json_out:
         payload = analysis_payload(system, filtration)
         if locus is not None:
-            payload["singular_locus"] = format_expression(locus)
+            payload["singular_locus"] = format_expression(locus.equation)
+            payload["singular_locus_equations"] = [format_expression(e) for e in locus.equations]
+            payload["singular_locus_statement"] = locus.statement()
+            payload["singular_locus_determinants"] = [
+                {"frame": [format_word(w) for w in frame], "determinant": format_expression(d)}
+                for frame, d in locus.determinants
+            ]
         emit_json(payload)
         return
     print_analysis(system, filtration)
     if locus is not None:
-        stdout_console().print(f"singular locus: {format_expression(locus)} = 0")
+        stdout_console().print(f"singular locus: {locus.statement()}", markup=False)

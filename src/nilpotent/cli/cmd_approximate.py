@@ -7,11 +7,13 @@ from typing import Annotated, Any
 import typer
 
 from nilpotent.cli.app import (
+    MAX_BRACKET_LENGTH,
     AtOpt,
     JsonOpt,
     ModelArg,
     ParamOpt,
     app,
+    bounded_int,
     cli_errors,
     emit_json,
     literal,
@@ -20,46 +22,12 @@ from nilpotent.cli.app import (
     stdout_console,
     work,
 )
-from nilpotent.cli.cmd_analyze import analysis_payload
 from nilpotent.errors import OptionError
 
 
 def approximation_payload(system, approx) -> dict[str, Any]:
-    """The ``nilpotent/approximation@1`` JSON object (INTERFACE.md)."""
-    from nilpotent.core.expressions import format_expression
-
-    coords = approx.coordinates
-    cert = approx.certificate
-    payload = analysis_payload(system, approx.filtration)
-    payload["schema"] = "nilpotent/approximation@1"
-    payload["method"] = coords.method
-    payload["privileged"] = {
-        "names": [str(s) for s in coords.names],
-        "expressions": [format_expression(e) for e in coords.forward],
-        "inverse": [format_expression(e) for e in coords.inverse],
-        "inverse_exact": coords.inverse_exact,
-        "forward_exact": coords.forward_exact,
-        "numeric": coords.numeric,
-    }
-    payload["fields"] = [[format_expression(c) for c in f] for f in approx.fields]
-    payload["fields_x"] = [[format_expression(c) for c in f] for f in approx.fields_x]
-    payload["certificate"] = {
-        "orders": list(cert.orders),
-        "weights": list(cert.weights),
-        "nilpotent_step": cert.nilpotent_step,
-        "homogeneous": cert.homogeneous,
-        "growth_vector_at_0": list(cert.growth_vector_at_0),
-        "remainder_order_ok": cert.remainder_order_ok,
-        "remainder_orders": list(cert.remainder_orders),
-        "step": cert.step,
-        "growth_vector": list(cert.growth_vector),
-        "pushforward_ok": cert.pushforward_ok,
-        "privileged": cert.privileged,
-        "exact": cert.exact,
-        "ok": cert.ok,
-        "failures": list(cert.failures()),
-    }
-    return payload
+    """The ``nilpotent/approximation@1`` JSON object (``NilpotentApproximation.to_json``)."""
+    return approx.to_json()
 
 
 @app.command("approximate")
@@ -76,6 +44,16 @@ def approximate_command(
         ),
     ] = "auto",
     param: ParamOpt = None,
+    max_length: Annotated[
+        int | None,
+        typer.Option(
+            "--max-length",
+            parser=bounded_int("--max-length", 1, MAX_BRACKET_LENGTH),
+            help="Longest bracket length examined at the point (default: automatic, raised "
+            "within a budget of Hall words while the brackets do not span); matters only "
+            "at singular points.",
+        ),
+    ] = None,
     latex: Annotated[bool, typer.Option("--latex", help="Print the result as LaTeX.")] = False,
     json_out: JsonOpt = False,
 ) -> None:
@@ -93,7 +71,7 @@ def approximate_command(
     system = load_model_option(model, param)
     point = parse_point_option(at, system)
     with work(f"approximate {system.name}"):
-        approx = approximate(system, point, method=method)
+        approx = approximate(system, point, method=method, max_length=max_length)
     if json_out:
         emit_json(approximation_payload(system, approx))
     elif latex:

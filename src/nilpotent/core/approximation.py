@@ -23,7 +23,7 @@ Bracket convention $[X,Y] = DY\cdot X - DX\cdot Y$.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import symengine as se
 import sympy as sp
@@ -36,15 +36,16 @@ from nilpotent.core.privileged import (
     exponential_grading,
     privileged_coordinates,
 )
+from nilpotent.core.spans import Decision, ExprVector, MeasuredSpan, Span
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
     Poly,
     ZeroTest,
     bracket,
     to_symengine,
-    weighted_jets,
 )
 from nilpotent.errors import OptionError
+from nilpotent.progress import progress
 
 __all__ = ["Certificate", "NilpotentApproximation", "approximate", "certify"]
 
@@ -244,6 +245,48 @@ class NilpotentApproximation:
         lines += ["  " + s for s in str(self.certificate).splitlines()]
         return "\n".join(lines)
 
+    def to_json(self) -> dict[str, object]:
+        """The ``nilpotent/approximation@1`` JSON object (``INTERFACE.md``).
+
+        The analysis@1 keys of the filtration, plus ``method``, ``privileged``
+        (names, expressions, inverse, exactness), ``fields``, ``fields_x`` and
+        ``certificate``.
+        """
+        from nilpotent.core.expressions import format_expression
+
+        coords = self.coordinates
+        cert = self.certificate
+        payload = self.filtration.to_json()
+        payload["schema"] = "nilpotent/approximation@1"
+        payload["method"] = coords.method
+        payload["privileged"] = {
+            "names": [str(s) for s in coords.names],
+            "expressions": [format_expression(e) for e in coords.forward],
+            "inverse": [format_expression(e) for e in coords.inverse],
+            "inverse_exact": coords.inverse_exact,
+            "forward_exact": coords.forward_exact,
+            "numeric": coords.numeric,
+        }
+        payload["fields"] = [[format_expression(c) for c in f] for f in self.fields]
+        payload["fields_x"] = [[format_expression(c) for c in f] for f in self.fields_x]
+        payload["certificate"] = {
+            "orders": list(cert.orders),
+            "weights": list(cert.weights),
+            "nilpotent_step": cert.nilpotent_step,
+            "homogeneous": cert.homogeneous,
+            "growth_vector_at_0": list(cert.growth_vector_at_0),
+            "remainder_order_ok": cert.remainder_order_ok,
+            "remainder_orders": list(cert.remainder_orders),
+            "step": cert.step,
+            "growth_vector": list(cert.growth_vector),
+            "pushforward_ok": cert.pushforward_ok,
+            "privileged": cert.privileged,
+            "exact": cert.exact,
+            "ok": cert.ok,
+            "failures": list(cert.failures()),
+        }
+        return payload
+
     def to_latex(self) -> str:
         """The coordinates and both forms of the fields as a LaTeX ``align*`` block."""
         coords = self.coordinates
@@ -317,37 +360,44 @@ def _homogeneous(
 
 
 class _Echelon:
-    """Incremental linear independence of sparse vectors with exact coefficients."""
+    """Incremental rank of sparse coefficient vectors, through :mod:`nilpotent.core.spans`.
+
+    Exact coefficients are decided by the certified engine (:class:`Span`);
+    floating-point coefficients (approximations at transcendental points) by a
+    scale-invariant :class:`MeasuredSpan`.  Every decision that is not proved
+    (floats, or *undetermined*) is counted in ``zero.numeric_decisions``, so
+    that the certificate says it was not exact.
+    """
 
     def __init__(self, zero: ZeroTest) -> None:
-        self.rows: list[tuple[object, dict]] = []
         self.zero = zero
-
-    def reduce(self, vec: dict) -> dict:
-        v = {k: c for k, c in vec.items() if not self.zero(c)}
-        for piv, row in self.rows:
-            c = v.get(piv)
-            if c is None:
-                continue
-            factor = c / row[piv]
-            for k, rc in row.items():
-                nv = se.expand(v.get(k, 0) - factor * rc)
-                if self.zero(nv):
-                    v.pop(k, None)
-                else:
-                    v[k] = nv
-        return v
+        self.span = Span()
+        self.measured: MeasuredSpan | None = None
 
     def add(self, vec: dict) -> bool:
-        v = self.reduce(vec)
+        v = {k: c for k, c in vec.items() if c != 0}
         if not v:
             return False
-        self.rows.append((min(v, key=repr), v))
-        return True
+        if self.measured is not None or any(_is_float(c) for c in v.values()):
+            if self.measured is None:
+                self.measured = MeasuredSpan()
+                for old in self.span.vectors:
+                    self.measured.try_add(old.entries)  # type: ignore[attr-defined]
+            self.zero.numeric_decisions += 1
+            return self.measured.try_add(v)
+        decision = self.span.add(ExprVector(v))
+        if decision is Decision.UNDETERMINED:
+            self.zero.numeric_decisions += 1
+        return decision is Decision.INDEPENDENT
 
     @property
     def rank(self) -> int:
-        return len(self.rows)
+        return self.measured.rank if self.measured is not None else self.span.rank
+
+
+def _is_float(c: object) -> bool:
+    e = se.S(c)
+    return isinstance(e, se.RealDouble) or bool(e.atoms(se.RealDouble))
 
 
 def _field_vector(field: Sequence[Poly]) -> dict:
@@ -415,24 +465,51 @@ def _remainder_orders(
 def _pushforward_ok(
     approx: NilpotentApproximation, hat: Sequence[Sequence[Poly]], zero: ZeroTest
 ) -> bool:
+    r"""Pull ``fields_x`` back: $(\partial y/\partial x)(x(y))\,[\hat X]_x(x(y))$ equals $\hat X$.
+
+    All in truncated polynomial arithmetic in $y$: ``fields_x`` is read as a
+    polynomial in $d = x - p$, composed with $d(y) = B\chi(y)$; the Jacobian is
+    $(\partial y/\partial z)(\chi(y))\,A$ from the forward map $y(z)$.  Component
+    $j$ is compared up to weighted degree $w_j$ (exact coordinates) or $w_j - 1$.
+    """
     coords = approx.coordinates
     ctx = _Context.of(approx.filtration, approx.coordinates.numeric)
     w = coords.weights
     n = coords.n
     exact = coords.inverse_exact and coords.forward_exact and approx.fields_x_exact
     degrees = [wj if exact else wj - 1 for wj in w]
-    xs = ctx.xsyms
-    fwd = [to_symengine(e) for e in coords.forward]
-    jac = [[se.expand(f.diff(x)) for x in xs] for f in fwd]
-    exprs = []
-    for fx in approx.fields_x:
-        comps = [to_symengine(c) for c in fx]
+    top = max(degrees)
+    ds = [se.Symbol(f"_nilpotent_d{k}") for k in range(n)]
+    shift = {x: d + to_symengine(p) for x, d, p in zip(ctx.xsyms, ds, ctx.p, strict=True)}
+    chi = list(coords.inverse_poly)
+    d_of_y = [
+        x - Poly.constant(n, to_symengine(p)) for x, p in zip(ctx.x_of(chi), ctx.p, strict=True)
+    ]
+    jac_z = [
+        [coords.forward_poly[j].diff(l).compose(chi, w, top) for l in range(n)] for j in range(n)
+    ]
+    jac = []
+    for j in range(n):
+        row = []
+        for k in range(n):
+            acc = Poly(n)
+            for l in range(n):
+                a = ctx.Ase[l][k]
+                if a != 0 and jac_z[j][l].terms:
+                    acc = acc + jac_z[j][l].scale(a)
+            row.append(acc)
+        jac.append(row)
+    for fx, h in zip(approx.fields_x, hat, strict=True):
+        comps = [
+            Poly.from_expr(to_symengine(c).xreplace(shift), ds).compose(d_of_y, w, top)
+            for c in fx
+        ]
         for j in range(n):
-            exprs.append(se.expand(se.Add(*[jac[j][k] * comps[k] for k in range(n)])))
-    jets = weighted_jets(exprs, xs, ctx.x_of(coords.inverse_poly), w, max(degrees), ctx.numeric)
-    for i, h in enumerate(hat):
-        for j in range(n):
-            diff = (jets[i * n + j] - h[j]).truncate(w, degrees[j])
+            acc = Poly(n)
+            for k in range(n):
+                if jac[j][k].terms and comps[k].terms:
+                    acc = acc + jac[j][k].mul(comps[k], w, degrees[j])
+            diff = (acc - h[j]).truncate(w, degrees[j])
             if diff.drop_zeros(zero).terms:
                 return False
     return True
@@ -532,6 +609,7 @@ def approximate(
     method: str = "auto",
     *,
     numeric: bool | None = None,
+    max_length: int | None = None,
 ) -> NilpotentApproximation:
     r"""The nilpotent approximation of ``sys`` at ``point``, with its computed certificate.
 
@@ -549,6 +627,10 @@ def approximate(
         ``None`` (default) for exact unless the values at the point are
         transcendental (see :func:`~nilpotent.core.privileged.privileged_coordinates`);
         ``coordinates.numeric`` and the printed output say which.
+    max_length:
+        Longest bracket length examined at $p$ (default automatic: raised
+        within a budget while the search is exhausted before the dimension;
+        see :func:`~nilpotent.core.filtration.analyze`).
 
     Returns
     -------
@@ -560,6 +642,8 @@ def approximate(
         ``method="linear"`` where linear adapted coordinates are not privileged.
     NotBracketGeneratingError
         If the system is not bracket-generating at the point.
+    ComputationLimitError
+        If whether it is bracket-generating stays undetermined within the budget.
 
     Examples
     --------
@@ -571,7 +655,21 @@ def approximate(
     >>> a.certificate.ok
     True
     """
-    coords = privileged_coordinates(sys, point, method, numeric=numeric)
+    with progress(f"nilpotent approximation of {sys.name}", total=3) as bar:
+        bar.update(0, "privileged coordinates")
+        coords = privileged_coordinates(
+            sys, point, method, numeric=numeric, max_length=max_length
+        )
+        bar.update(1, "approximation")
+        result = _approximation(sys, coords)
+        bar.update(2, "certificate")
+        cert = certify(result)
+        bar.update(3)
+    return replace(result, certificate=cert)
+
+
+def _approximation(sys: ControlSystem, coords: PrivilegedCoordinates) -> NilpotentApproximation:
+    """The approximation in ``coords`` (its certificate not computed yet)."""
     w = coords.weights
     ctx = _Context.of(coords.filtration, coords.numeric)
     jets = coords.field_jets(extra=1)
@@ -581,17 +679,6 @@ def approximate(
     ]
     fields = tuple(tuple(c.to_sympy(coords.names) for c in h) for h in hat)
     fields_x, x_exact = _pushforward(coords, hat)
-    provisional = NilpotentApproximation(
-        system=sys,
-        point=coords.point,
-        filtration=coords.filtration,
-        coordinates=coords,
-        fields=fields,
-        fields_x=fields_x,
-        fields_x_exact=x_exact,
-        certificate=None,  # type: ignore[arg-type]
-    )
-    cert = certify(provisional)
     return NilpotentApproximation(
         system=sys,
         point=coords.point,
@@ -600,5 +687,5 @@ def approximate(
         fields=fields,
         fields_x=fields_x,
         fields_x_exact=x_exact,
-        certificate=cert,
+        certificate=None,  # type: ignore[arg-type]
     )

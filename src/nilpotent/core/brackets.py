@@ -15,6 +15,7 @@ exponentially), and cached per system; values at a point
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterable, Sequence
 from functools import lru_cache
@@ -24,7 +25,7 @@ import symengine as se
 import sympy as sp
 
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import OptionError, PointError
+from nilpotent.errors import ComputationLimitError, OptionError, PointError
 
 Word: TypeAlias = "int | tuple[Word, Word]"
 """A bracket word: a 1-based generator index or a pair ``(u, v)`` meaning $[u, v]$."""
@@ -270,6 +271,43 @@ def se_bracket(X: SeField, Y: SeField, coords: Sequence[se.Symbol]) -> SeField:
     return tuple(out)
 
 
+EXPANSION_TERMS_BUDGET = 2_000_000
+"""Most terms an expanded field component may have (a bound checked before expanding)."""
+
+
+def _terms(e: se.Basic) -> int:
+    """Number of terms of an expanded expression."""
+    return len(e.args) if isinstance(e, se.Add) else 1
+
+
+def _expanded_terms_bound(e: se.Basic) -> int:
+    """An upper bound on the number of terms of ``se.expand(e)`` (without expanding)."""
+    if isinstance(e, se.Add):
+        return sum(_expanded_terms_bound(a) for a in e.args)
+    if isinstance(e, se.Mul):
+        out = 1
+        for a in e.args:
+            out *= _expanded_terms_bound(a)
+        return out
+    if isinstance(e, se.Pow):
+        base, ex = e.args
+        if isinstance(ex, se.Integer) and int(ex) > 1:
+            t = _expanded_terms_bound(base)
+            return math.comb(int(ex) + t - 1, t - 1) if t > 1 else 1
+        return 1
+    return 1
+
+
+def _check_expansion(sys: ControlSystem, word: Word, bound: int) -> None:
+    if bound > EXPANSION_TERMS_BUDGET:
+        raise ComputationLimitError(
+            f"the field of {format_word(word)} of {sys.name!r} would expand to up to "
+            f"{bound:,} terms per component (budget EXPANSION_TERMS_BUDGET = "
+            f"{EXPANSION_TERMS_BUDGET:,} in nilpotent.core.brackets): refused instead of "
+            "exhausting memory; a smaller model (or expanded fields) is needed"
+        )
+
+
 def word_field_symengine(sys: ControlSystem, word: Word) -> SeField:
     """The field of ``word`` as symengine expressions, expanded, cached on ``sys``.
 
@@ -283,7 +321,9 @@ def word_field_symengine(sys: ControlSystem, word: Word) -> SeField:
     if isinstance(word, int):
         if not 1 <= word <= sys.m:
             raise OptionError(f"{format_word(word)} is not a field of {sys.name!r} (m = {sys.m})")
-        value = tuple(se.expand(to_symengine(e)) for e in sys.specialized_fields[word - 1])
+        raw = [to_symengine(e) for e in sys.specialized_fields[word - 1]]
+        _check_expansion(sys, word, max(_expanded_terms_bound(e) for e in raw))
+        value = tuple(se.expand(e) for e in raw)
     elif word[0] == word[1]:
         value = tuple(se.Integer(0) for _ in range(sys.n))
     elif (word[1], word[0]) in cache:
@@ -291,6 +331,12 @@ def word_field_symengine(sys: ControlSystem, word: Word) -> SeField:
     else:
         left = word_field_symengine(sys, word[0])
         right = word_field_symengine(sys, word[1])
+        # [X, Y]_j = sum_k X_k d_k Y_j - Y_k d_k X_j: at most this many terms
+        bound = max(
+            sum(_terms(a) * _terms(b) for a in left) + sum(_terms(a) * _terms(b) for a in right)
+            for b in (*left, *right)
+        )
+        _check_expansion(sys, word, bound)
         value = se_bracket(left, right, se_coordinates(sys))
     cache[word] = value
     return value

@@ -9,92 +9,65 @@ bracket-generating there.  Bracket convention $[X,Y] = DY\\cdot X - DX\\cdot Y$.
 
 How it is computed
 ------------------
-1. *Generic growth vector*, at a pseudo-random point $q$ near $p$ (fixed seed),
-   confirmed at a second one.  A random point is regular with probability
-   one, so near $q$ the words chosen up to length $s$ span $\\Delta^s$ as a
-   module and $\\Delta^{s+1}(q)$ is spanned by them and the brackets $[X_i, Y]$
-   with $Y$ a word chosen at length $s$: only $m\\,(n_s - n_{s-1})$ new
-   brackets per length.  At a regular point the span grows at every length
-   until it stops for ever, so this ends after at most $n$ lengths.  Values
-   are doubles; a new word $[u, v]$ is evaluated from the fields of $u$ and
-   $v$ by complex-step directional derivatives, so the longest fields are never
-   expanded.  Each value is normalised and its distance to the span decides
-   (independent above :data:`DOUBLE_INDEPENDENT`, dependent below
-   :data:`DOUBLE_DEPENDENT`); in between, 212-bit values and :data:`GENERIC_TOL`
-   decide.
+1. *Generic growth vector*, at a pseudo-random rational point $q$ near $p$
+   (fixed seed), confirmed at a second one.  A random point is regular with
+   probability one, so near $q$ the words chosen up to length $s$ span
+   $\\Delta^s$ as a module and $\\Delta^{s+1}(q)$ is spanned by them and the
+   brackets $[X_i, Y]$ with $Y$ a word chosen at length $s$.  A new word
+   $[u, v]$ is evaluated from the fields of $u$ and $v$ by forward-mode
+   directional derivatives (exact rationals, or arb balls), so the longest
+   fields are never expanded.
 2. *At p* the Hall words of each length are scanned in order and kept when
    their value at $p$ is independent of those already kept (greedy, earliest
-   first).  Since $n_s(p) \\le n_s(q)$ (rank is lower semicontinuous), the scan
-   of length $s$ stops as soon as the rank reaches the generic $n_s$; otherwise
-   it runs through every Hall word of that length, so $n_s(p)$ is exact also at
-   singular points, where the span can stall for some lengths and grow later
-   (Martinet at 0: growth $(2, 2, 3)$).
-3. Ranks at $p$ are exact (fraction-free elimination over $\\mathbb{Q}$ or a
-   number field such as $\\mathbb{Q}(\\sqrt3)$) when the values are rational or
-   algebraic, else decided numerically with 50 digits and tolerance
-   :data:`POINT_TOL` (``Filtration.exact`` is then false).
+   first).  Since $n_s(p) \\le n_s(q)$, the scan of length $s$ stops as soon as
+   the rank reaches the generic $n_s$; otherwise it runs through every Hall
+   word of that length, so $n_s(p)$ is exact also at singular points, where
+   the span can stall for some lengths and grow later (Martinet at 0:
+   growth $(2, 2, 3)$).
+3. Every decision is made by the one rank engine :mod:`nilpotent.core.spans`:
+   independence proved by ball arithmetic (scale-invariant: normalised Gram
+   determinants), dependence proved by exact arithmetic; what cannot be
+   proved is *undetermined* and reported (``Filtration.undetermined``), never
+   turned into a verdict.  "Not bracket-generating" is said only when the
+   span at random points stops growing below $n$.
 """
 
 from __future__ import annotations
 
-import math
 import random
-import re
+import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import mpmath
-import symengine as se
 import sympy as sp
-from sympy.polys.matrices import DomainMatrix
 
 from nilpotent.core.brackets import (
     Word,
     format_word,
     hall_basis,
-    is_built,
-    se_coordinates,
-    to_symengine,
-    to_sympy,
-    word_field_symengine,
     word_length,
     word_values_at,
 )
+from nilpotent.core.spans import (
+    START_PRECISION_BITS,
+    Decision,
+    Span,
+    exact_decimals,
+    exact_value,
+)
 from nilpotent.core.system import ControlSystem
+from nilpotent.core.word_values import Undefined, WordValues
 from nilpotent.errors import (
     ComputationLimitError,
     ModelError,
-    NotBracketGeneratingError,
     PointError,
 )
+from nilpotent.progress import progress
 
-GENERIC_TOL = 1e-30
-"""Relative tolerance of the 212-bit rank decisions at random points."""
-
-GENERIC_ZERO = 1e-40
-"""Norm below which a 212-bit value of a word at a random point is zero."""
-
-DOUBLE_INDEPENDENT = 1e-6
-DOUBLE_DEPENDENT = 1e-10
-DOUBLE_ZERO = 1e-9
-"""Double-precision thresholds at random points; between them, 212-bit values decide."""
-
-COMPLEX_STEP = 1e-4
-"""Relative step of the complex-step derivatives at random points."""
-
-POINT_TOL = 1e-25
-"""Relative tolerance of numerical rank decisions at ``p`` (50-digit evaluation)."""
-
-POINT_ZERO = 1e-35
-"""Norm below which a 50-digit value at ``p`` is zero."""
-
-GENERIC_PREC_BITS = 212
-_GENERIC_DPS = 60
 GENERIC_PERTURBATION = 0.25
 """Half-width of the box around ``p`` in which the random points are drawn."""
 
 _SEED = 20240611
-_FINITE = re.compile(r"[-+]?\d+(\.\d*)?([eE][-+]?\d+)?")
 
 
 @dataclass(frozen=True)
@@ -108,7 +81,9 @@ class Filtration:
     point:
         The point $p$ (sympy numbers aligned with ``system.coordinates``).
     bracket_generating:
-        Whether the brackets span $\\mathbb{R}^n$ at ``p``.
+        Whether the brackets span $\\mathbb{R}^n$ at ``p``: True (proved), False
+        (the span at random points near ``p`` stops below $n$) or None
+        (undetermined: see ``undetermined``).
     growth_vector:
         $(n_1(p), \\dots, n_r(p))$; ends where the span stops growing ($n$ when
         bracket-generating).
@@ -122,139 +97,99 @@ class Filtration:
     frame_values:
         ``frame_values[k][j]`` is the $x_{j+1}$-component of $Y_{k+1}(p)$.
     regular:
-        Whether the growth vector at ``p`` equals the generic one near ``p``.
+        Whether the growth vector at ``p`` equals the generic one near ``p``
+        (None when a rank at ``p`` is undetermined).
     generic_growth_vector:
         The growth vector at random points near ``p``.
     exact:
-        Whether the ranks at ``p`` were decided exactly.
+        Whether every "dependent" decision at ``p`` was proved by exact arithmetic
+        (independence is always proved, by ball arithmetic or exactly).
     max_length:
-        The longest bracket length examined at ``p``.  When the system is
-        bracket-generating at nearby points but not within this length at
-        ``p`` (only possible at a singular point), ``bracket_generating`` is
-        false *up to this length*: a longer bracket could still add a direction.
+        The longest bracket length examined at ``p``.
+    undetermined:
+        None when every decision was proved; else what could not be decided and
+        what was tried: ``max_length`` (bracket length searched),
+        ``precision_bits`` (highest ball precision), ``undetermined_words``
+        (per length, the words whose independence was not decided),
+        ``reason`` (a sentence) and ``raise_with`` (the option that searches further).
+    invariant_hypersurface:
+        Where the brackets span $\\mathbb{R}^n$ nearby but not at ``p``: a
+        polynomial $g$ with $g(p) = 0$, $\\nabla g(p) \\ne 0$ whose zero set is
+        invariant under every field, proving ``bracket_generating`` false
+        (:func:`nilpotent.core.singular.invariant_hypersurface`); else None.
     """
 
     system: ControlSystem
     point: tuple[sp.Expr, ...]
-    bracket_generating: bool
+    bracket_generating: bool | None
     growth_vector: tuple[int, ...]
     weights: tuple[int, ...]
     step: int
     frame: tuple[Word, ...]
     frame_values: tuple[tuple[sp.Expr, ...], ...]
-    regular: bool
+    regular: bool | None
     generic_growth_vector: tuple[int, ...]
     exact: bool
     max_length: int = 0
+    undetermined: Mapping[str, object] | None = None
+    invariant_hypersurface: sp.Expr | None = None
 
     @property
     def frame_names(self) -> tuple[str, ...]:
         """The frame words as users write them (``"[X1,X2]"``)."""
         return tuple(format_word(w) for w in self.frame)
 
+    def to_json(self) -> dict[str, object]:
+        """The ``nilpotent/analysis@1`` JSON object (``INTERFACE.md``).
 
-# --- rank trackers ------------------------------------------------------------
+        ``bracket_generating`` and ``regular`` are ``null`` when undetermined;
+        ``undetermined`` is then an object saying what was tried (else ``null``).
+        """
+        from nilpotent.core.expressions import format_expression
+        from nilpotent.core.points import format_point
 
-
-def _residual(basis: list[list], vec: list, fsum) -> tuple[float, list]:
-    """Distance of the unit vector ``vec`` to the span of the orthonormal ``basis``.
-
-    Gram–Schmidt applied twice (stable); returns the distance and the residual.
-    """
-    res = list(vec)
-    for _ in range(2):
-        for b in basis:
-            c = fsum(x * y for x, y in zip(res, b, strict=True))
-            res = [x - c * y for x, y in zip(res, b, strict=True)]
-    return fsum(x * x for x in res) ** 0.5, res
-
-
-class _MpSpan:
-    """Incremental span of real vectors at ``dps`` digits.
-
-    A vector is independent when its distance to the span, after normalising it
-    to unit length, exceeds ``tol``; a vector of norm below ``zero`` is zero
-    (trigonometric identities leave such rounding residues).
-    """
-
-    def __init__(self, tol: float, zero: float, dps: int) -> None:
-        self.tol, self.zero, self.dps = tol, zero, dps
-        self.basis: list[list[mpmath.mpf]] = []
-
-    def try_add(self, vec: Sequence[mpmath.mpf]) -> bool:
-        with mpmath.workdps(self.dps):
-            norm = mpmath.sqrt(mpmath.fsum(v * v for v in vec))
-            if norm <= self.zero:
-                return False
-            dist, res = _residual(self.basis, [v / norm for v in vec], mpmath.fsum)
-            if dist <= self.tol:
-                return False
-            self.basis.append([x / dist for x in res])
-        return True
+        sys = self.system
+        return {
+            "schema": "nilpotent/analysis@1",
+            "model": sys.name,
+            "coordinates": list(sys.coordinate_names),
+            "parameters": {k: format_expression(v) for k, v in sys.parameters},
+            "point": format_point(sys, self.point),
+            "bracket_generating": self.bracket_generating,
+            "growth_vector": list(self.growth_vector),
+            "weights": list(self.weights),
+            "step": self.step,
+            "regular": self.regular,
+            "generic_growth_vector": list(self.generic_growth_vector),
+            "exact": self.exact,
+            "max_length": self.max_length,
+            "frame": list(self.frame_names),
+            "frame_values": [[format_expression(v) for v in col] for col in self.frame_values],
+            "undetermined": dict(self.undetermined) if self.undetermined is not None else None,
+            "invariant_hypersurface": (
+                format_expression(self.invariant_hypersurface)
+                if self.invariant_hypersurface is not None
+                else None
+            ),
+        }
 
 
-class _ExactSpan:
-    """Incremental span of exact vectors (rational or algebraic entries).
-
-    Ranks by fraction-free elimination over $\\mathbb{Q}$ or a number field; falls
-    back to 50-digit numerics (tolerance :data:`POINT_TOL`) for entries that are
-    not algebraic numbers (e.g. ``cos(1)``) and records it in :attr:`exact`.
-    """
-
-    def __init__(self, n: int) -> None:
-        self.n = n
-        self.rows: list[tuple[sp.Expr, ...]] = []
-        self.exact = True
-        self._numeric = _MpSpan(POINT_TOL, POINT_ZERO, 50)
-
-    @property
-    def rank(self) -> int:
-        return len(self.rows)
-
-    @staticmethod
-    def _decidable(vec: Sequence[sp.Expr]) -> bool:
-        return all(e.is_Rational or (not e.has(sp.Float) and e.is_algebraic) for e in vec)
-
-    def try_add(self, vec: tuple[sp.Expr, ...]) -> bool:
-        if all(e == 0 for e in vec):
-            return False
-        if self.exact and not self._decidable(vec):
-            self.exact = False
-            for row in self.rows:
-                self._numeric.try_add(_mp_vector(row, 50))
-        if self.exact:
-            rows = [*self.rows, vec]
-            dm = DomainMatrix.from_list_sympy(
-                len(rows), self.n, [list(r) for r in rows], extension=True
-            )
-            if not dm.domain.is_Field:
-                dm = dm.to_field()
-            if dm.rank() <= len(self.rows):
-                return False
-        elif not self._numeric.try_add(_mp_vector(vec, 50)):
-            return False
-        self.rows.append(vec)
-        return True
+# --- values of words -------------------------------------------------------------
 
 
-def _mp_vector(vec: Sequence[sp.Expr], dps: int) -> list[mpmath.mpf]:
-    with mpmath.workdps(dps):
-        return [mpmath.mpf(str(sp.N(e, dps + 10))) for e in vec]
+ANALYSIS_TIME_BUDGET = 60.0
+"""Seconds the bracket search at a point may take before its result is undetermined."""
 
 
 # --- generic growth vector ----------------------------------------------------
 
 
-class _Undefined(Exception):
-    """A field cannot be evaluated (pole, complex value) at a random point."""
-
-
 def _random_points(point: Sequence[sp.Expr], count: int) -> list[list[sp.Expr]]:
-    """Pseudo-random exact points near ``point``: ``p + δ`` with rational ``δ``.
+    """Pseudo-random rational points near ``point``: ``round(p) + δ`` with rational ``δ``.
 
-    Exact, so that they can be evaluated at any precision (symengine rounds
-    rational coefficients to double precision when floats are substituted).
-    Floats in ``point`` are replaced by their exact binary value.
+    An irrational ``p`` is first replaced by a 20-digit decimal (a random point
+    only needs to be near ``p``), so that the values of rational fields are
+    exact rationals.
     """
     rng = random.Random(_SEED)
     den = 2**20
@@ -263,163 +198,17 @@ def _random_points(point: Sequence[sp.Expr], count: int) -> list[list[sp.Expr]]:
     for _ in range(count):
         vals = []
         for v in point:
-            centre = v.replace(lambda e: e.is_Float, lambda e: sp.Rational(e))
+            q = exact_value(v)
+            centre = (
+                sp.Rational(int(q.p), int(q.q)) if q is not None else sp.Rational(str(sp.N(v, 20)))
+            )
             vals.append(centre + sp.Rational(rng.randint(-half, half), den))
         out.append(vals)
     return out
 
 
-def _as_float(v: se.Basic) -> float:
-    """A real double from a symengine number (``atan2`` of doubles needs ``n()``)."""
-    try:
-        c = complex(v)
-    except (TypeError, RuntimeError, ValueError):
-        try:
-            c = complex(v.n(53, real=True))
-        except (TypeError, RuntimeError, ValueError) as exc:
-            raise _Undefined from exc
-    if not math.isfinite(c.real) or c.imag != 0:
-        raise _Undefined
-    return c.real
-
-
-class _GenericPoint:
-    """Values of words at one random point ``q``: doubles, and 212-bit when needed.
-
-    Words whose field is not built yet, $[u, v]$, are evaluated as
-    $Dv(q)u(q) - Du(q)v(q)$ from directional derivatives of the fields of ``u``
-    and ``v``, so the longest fields are never expanded.
-    """
-
-    def __init__(self, sys: ControlSystem, exact_point: Sequence[sp.Expr]) -> None:
-        self.sys = sys
-        coords = se_coordinates(sys)
-        self.exact = dict(zip(coords, (to_symengine(v) for v in exact_point), strict=True))
-        self.q = {x: float(sp.N(v, 20)) for x, v in zip(coords, exact_point, strict=True)}
-        self.doubles = {x: se.RealDouble(v) for x, v in self.q.items()}
-        self._dcache: dict[Word, list[float]] = {}
-        self._hcache: dict[Word, list[mpmath.mpf]] = {}
-
-    def double(self, word: Word) -> list[float]:
-        """Values in double precision."""
-        hit = self._dcache.get(word)
-        if hit is not None:
-            return hit
-        if is_built(self.sys, word):
-            vals = [
-                _as_float(e.subs(self.doubles) if e.free_symbols else e)
-                for e in word_field_symengine(self.sys, word)
-            ]
-        else:
-            u, v = word
-            fu, fv = word_field_symengine(self.sys, u), word_field_symengine(self.sys, v)
-            uq, vq = self.double(u), self.double(v)
-            try:
-                vals = [
-                    b - a
-                    for a, b in zip(self._step(fu, vq), self._step(fv, uq), strict=True)
-                ]
-            except _Undefined:
-                word_field_symengine(self.sys, word)
-                vals = self.double(word)
-        self._dcache[word] = vals
-        return vals
-
-    def _step(self, field: Sequence[se.Basic], direction: Sequence[float]) -> list[float]:
-        """Directional derivative $\\frac{d}{dt} Z(q + t d)|_{t=0}$ of ``field``, in doubles.
-
-        Complex step $\\operatorname{Im} Z(q + i h d)/h$ (no cancellation), with
-        Richardson extrapolation over $h$ and $2h$ (error $O(h^4)$), $h = 10^{-4}/|d|_\\infty$.
-        Raises :class:`_Undefined` where the field has no complex extension in
-        symengine (``atan2``); the caller then builds the bracket instead.
-        """
-        scale = max(abs(d) for d in direction)
-        if scale == 0:
-            return [0.0] * len(field)
-        h = COMPLEX_STEP / scale
-        steps = []
-        for hh in (h, 2 * h):
-            subs = {
-                x: se.S(complex(self.q[x], hh * d)) if d != 0 else self.doubles[x]
-                for x, d in zip(self.q, direction, strict=True)
-            }
-            row = []
-            for e in field:
-                if not e.free_symbols:
-                    row.append(0.0)
-                    continue
-                try:
-                    c = complex(e.subs(subs))
-                except (TypeError, RuntimeError, ValueError) as exc:
-                    raise _Undefined from exc
-                if not (math.isfinite(c.real) and math.isfinite(c.imag)):
-                    raise _Undefined
-                row.append(c.imag / hh)
-            steps.append(row)
-        return [(4 * a - b) / 3 for a, b in zip(*steps, strict=True)]
-
-    def precise(self, word: Word) -> list[mpmath.mpf]:
-        """Values at 212 bits (the word's field is built for it)."""
-        hit = self._hcache.get(word)
-        if hit is not None:
-            return hit
-        vals = []
-        for e in word_field_symengine(self.sys, word):
-            v = e.subs(self.exact) if e.free_symbols else e
-            try:
-                text = str(v.n(GENERIC_PREC_BITS, real=True))
-            except (TypeError, RuntimeError, ValueError) as exc:
-                raise _Undefined from exc
-            if not _FINITE.fullmatch(text):
-                raise _Undefined
-            with mpmath.workdps(_GENERIC_DPS + 10):
-                vals.append(mpmath.mpf(text))
-        self._hcache[word] = vals
-        return vals
-
-
-class _GenericSpan:
-    """Span of word values at a random point: double precision, 212 bits when unclear.
-
-    After normalising, a distance to the span above :data:`DOUBLE_INDEPENDENT` is
-    independent and one below :data:`DOUBLE_DEPENDENT` dependent; in between (or
-    for a vector of norm below :data:`DOUBLE_ZERO`) the decision is redone from
-    212-bit values with :data:`GENERIC_TOL`.
-    """
-
-    def __init__(self, at: _GenericPoint) -> None:
-        self.at = at
-        self.words: list[Word] = []
-        self.basis: list[list[float]] = []
-
-    @property
-    def rank(self) -> int:
-        return len(self.words)
-
-    def try_add(self, word: Word) -> bool:
-        vec = self.at.double(word)
-        norm = math.fsum(v * v for v in vec) ** 0.5
-        dist, res = (0.0, vec) if norm == 0 else _residual(
-            self.basis, [v / norm for v in vec], math.fsum
-        )
-        if norm == 0 or (dist < DOUBLE_DEPENDENT and norm > DOUBLE_ZERO):
-            return False
-        if not (dist > DOUBLE_INDEPENDENT and norm > DOUBLE_ZERO) and not self._precise(word):
-            return False
-        self.words.append(word)
-        if dist > 0:
-            self.basis.append([x / dist for x in res])
-        return True
-
-    def _precise(self, word: Word) -> bool:
-        span = _MpSpan(GENERIC_TOL, GENERIC_ZERO, _GENERIC_DPS)
-        for w in self.words:
-            span.try_add(self.at.precise(w))
-        return span.try_add(self.at.precise(word))
-
-
 def _generic_growth_at(
-    at: _GenericPoint, n: int, m: int, frame: Sequence[Word] | None = None
+    sys: ControlSystem, values: Sequence[sp.Expr], frame: Sequence[Word] | None = None
 ) -> tuple[tuple[int, ...], tuple[Word, ...]]:
     """Growth vector at a (random, assumed regular) point, and the words that realise it.
 
@@ -427,7 +216,17 @@ def _generic_growth_at(
     a second point); else new words are the brackets ``[X_i, Y]`` of the chosen
     generators with the words chosen at the previous length.
     """
-    span = _GenericSpan(at)
+    n, m = sys.n, sys.m
+    at = WordValues(sys, values, symbolic=False)
+    span = Span(probabilistic=True)
+    chosen: list[Word] = []
+
+    def add(w: Word) -> bool:
+        if span.add(at.vector(w)) is Decision.INDEPENDENT:
+            chosen.append(w)
+            return True
+        return False
+
     growth: list[int] = []
     if frame is not None:
         by_length: dict[int, list[Word]] = {}
@@ -435,24 +234,29 @@ def _generic_growth_at(
             by_length.setdefault(word_length(w), []).append(w)
         for s in range(1, max(by_length, default=0) + 1):
             for w in by_length.get(s, []):
-                span.try_add(w)
+                add(w)
             growth.append(span.rank)
-        return tuple(growth), tuple(span.words)
-    newest: list[Word] = [i for i in range(1, m + 1) if span.try_add(i)]
+        return tuple(growth), tuple(chosen)
+    newest: list[Word] = [i for i in range(1, m + 1) if add(i)]
     generators = list(newest)
     growth.append(span.rank)
     while span.rank < n:
-        candidates = [(g, w) for w in newest for g in generators]
+        candidates = []
+        for w in newest:
+            for g in generators:
+                # [X, X] = 0 and [Y, X] = -[X, Y]: each pair once
+                if g != w and (w, g) not in candidates:
+                    candidates.append((g, w))
         newest = []
         for w in candidates:
-            if span.try_add(w):
+            if add(w):
                 newest.append(w)
                 if span.rank == n:
                     break
         if not newest:
             break
         growth.append(span.rank)
-    return tuple(growth), tuple(span.words)
+    return tuple(growth), tuple(chosen)
 
 
 def generic_growth_vector(
@@ -460,24 +264,26 @@ def generic_growth_vector(
 ) -> tuple[int, ...]:
     """The growth vector at random points near ``point`` (the origin by default).
 
-    A pseudo-random exact point (fixed seed) in the box of half-width
+    A pseudo-random rational point (fixed seed) in the box of half-width
     :data:`GENERIC_PERTURBATION` around ``point`` is regular with probability one;
     there the words chosen at length $s$ span $\\Delta^s$ as a module, so only
     the brackets $[X_i, Y]$ with the words $Y$ chosen at the previous length are
-    needed.  The growth of the same words is confirmed at a second random point
-    and the componentwise maximum returned (each is a lower bound of the
-    generic value); if the two differ, the second point is analysed in full.
+    needed.  Decisions go through :class:`~nilpotent.core.spans.Span` (exact
+    for rational values, else certified balls; a Gram determinant that stays
+    within $2^{-3P/4}$ of 0 at a random point counts as 0, with probability one).
+    The growth of the same words is confirmed at a second random point and the
+    componentwise maximum returned (each is a lower bound of the generic
+    value); if the two differ, the second point is analysed in full.
     """
     p = _normalise_point(sys, point)
     results: list[tuple[int, ...]] = []
     frame: tuple[Word, ...] | None = None
     for values in _random_points(p, 8):
         try:
-            at = _GenericPoint(sys, values)
-            growth, words = _generic_growth_at(at, sys.n, sys.m, frame)
+            growth, words = _generic_growth_at(sys, values, frame)
             if frame is not None and growth != results[0]:
-                growth, words = _generic_growth_at(at, sys.n, sys.m)
-        except _Undefined:
+                growth, words = _generic_growth_at(sys, values)
+        except Undefined:
             continue
         results.append(growth)
         frame = words
@@ -499,7 +305,7 @@ def generic_growth_vector(
 def _normalise_point(
     sys: ControlSystem, point: Sequence[object] | Mapping[str, object] | None
 ) -> tuple[sp.Expr, ...]:
-    """The point as sympy numbers; checks its length, that it is real, and the fields."""
+    """The point as exact sympy numbers (decimals read as the rationals they denote)."""
     extra = set().union(*(sp.S(e).free_symbols for f in sys.specialized_fields for e in f))
     extra -= set(sys.coordinates)
     if extra:
@@ -513,7 +319,7 @@ def _normalise_point(
         point = sys.point(point)
     if len(point) != sys.n:
         raise PointError(f"a point of {sys.name!r} has {sys.n} coordinates, got {len(point)}")
-    values = tuple(sp.S(v) for v in point)
+    values = tuple(exact_decimals(v) for v in point)
     for name, v in zip(sys.coordinate_names, values, strict=True):
         if not (v.is_number and v.is_real is not False and v.is_finite is not False):
             raise PointError(f"coordinate {name} of the point must be a real number, got {v}")
@@ -521,7 +327,11 @@ def _normalise_point(
 
 
 def analyze(
-    sys: ControlSystem, point: Sequence[object] | None = None, *, max_length: int | None = None
+    sys: ControlSystem,
+    point: Sequence[object] | None = None,
+    *,
+    max_length: int | None = None,
+    time_budget: float = ANALYSIS_TIME_BUDGET,
 ) -> Filtration:
     """Growth vector, weights, adapted frame and regularity of ``sys`` at ``point``.
 
@@ -531,20 +341,26 @@ def analyze(
         The system (parameters are substituted).
     point:
         The point $p$, a sequence of sympy numbers aligned with the coordinates
-        (default: the origin).  Exact values give exact ranks.
+        (default: the origin).  Decimals are read as the rationals they denote.
     max_length:
-        Longest bracket length examined at ``p`` (default
-        :func:`default_max_length`).  Only singular points can need lengths
-        beyond the generic step; if the brackets up to this length do not span
-        at ``p`` while they do nearby, the result says ``bracket_generating``
-        false and records the length examined in ``Filtration.max_length``.
+        Longest bracket length examined at ``p``.  By default (``None``) the
+        search starts with :func:`default_max_length` and, when it is exhausted
+        before the brackets span (only possible at a singular point), is
+        raised automatically while the Hall words stay within
+        :data:`HALL_WORD_BUDGET` and the time within ``time_budget``.  Given
+        explicitly, it is not raised.
+    time_budget:
+        Seconds after which the search at ``p`` stops (the result is then
+        *undetermined* beyond the length reached).
 
     Returns
     -------
     Filtration
-        See its attributes.  For a system that is not bracket-generating the
-        growth vector ends at the dimension reached (``bracket_generating``
-        false); this is a result, not an error.
+        See its attributes.  ``bracket_generating`` is True (proved), False
+        (the generic span stops below $n$: not bracket-generating) or None
+        (*undetermined*: the search up to ``max_length`` was exhausted at a
+        singular point, or a rank decision could not be certified; what was
+        tried is in ``Filtration.undetermined``).
 
     Raises
     ------
@@ -561,60 +377,151 @@ def analyze(
     >>> f.frame_names
     ('X1', 'X2', '[X2,[X1,X2]]')
     """
+    started = time.monotonic()
     p = _normalise_point(sys, point)
     n, m = sys.n, sys.m
     generic = generic_growth_vector(sys, p)
     final = generic[-1]
+    automatic = max_length is None
     if max_length is not None:
         check_hall_budget(m, max_length)
-    limit = max_length if max_length is not None else default_max_length(n, m)
+    limit = default_max_length(n, m) if automatic else int(max_length)  # type: ignore[arg-type]
     limit = max(limit, len(generic))
-    span = _ExactSpan(n)
+    ceiling = max(limit, _budget_length(m)) if automatic else limit
+    at = WordValues(sys, p, symbolic=True)
+    span = Span()
     frame: list[Word] = []
-    values: list[tuple[sp.Expr, ...]] = []
     growth: list[int] = []
-    for s in range(1, limit + 1):
-        target = generic[s - 1] if s <= len(generic) else final
-        if span.rank < target:
-            for w in hall_basis(m, s):
-                if word_length(w) != s:
-                    continue
-                (vec,) = word_values_at(sys, [w], p)
-                if span.try_add(vec):
-                    frame.append(w)
-                    values.append(vec)
-                    if span.rank == target:
+    unsure: dict[int, list[Word]] = {}
+    stopped_by = ""
+    s = 0
+    with progress(f"brackets at the point of {sys.name}", total=None) as bar:
+        while True:
+            s += 1
+            target = generic[s - 1] if s <= len(generic) else final
+            if span.rank < target:
+                unsure_here: list[Word] = []
+                for w in hall_basis(m, s):
+                    if word_length(w) != s:
+                        continue
+                    try:
+                        decision = span.add(at.vector(w))
+                    except ComputationLimitError as exc:
+                        if s <= len(generic):
+                            raise
+                        stopped_by = f"a size budget ({exc})"
                         break
-        growth.append(span.rank)
-        if span.rank == final:
-            break
-    while len(growth) > 1 and growth[-1] == growth[-2]:
+                    except Undefined as exc:
+                        raise PointError(
+                            f"the fields of {sys.name!r} are not defined at the point "
+                            f"({', '.join(str(v) for v in p)}): {exc}"
+                        ) from None
+                    bar.advance(detail=f"length {s}")
+                    if decision is Decision.INDEPENDENT:
+                        frame.append(w)
+                        if span.rank == target:
+                            break
+                    elif decision is Decision.UNDETERMINED:
+                        unsure_here.append(w)
+                    if time.monotonic() - started > time_budget:
+                        stopped_by = f"the time budget of {time_budget:g} s"
+                        break
+                if span.rank < target and unsure_here:
+                    unsure[s] = unsure_here
+            growth.append(span.rank)
+            if span.rank == final or stopped_by:
+                break
+            if s >= limit:
+                if s >= ceiling or time.monotonic() - started > time_budget:
+                    break
+                limit += 1
+    limit = s
+    while len(growth) > 1 and growth[-1] == growth[-2] and not unsure:
         growth.pop()
     growth_t = tuple(growth)
     weights = tuple(
-        s
-        for s, (before, after) in enumerate(zip((0, *growth_t), growth_t, strict=False), start=1)
+        k
+        for k, (before, after) in enumerate(zip((0, *growth_t), growth_t, strict=False), start=1)
         for _ in range(after - before)
     )
+    bracket_generating: bool | None
+    undetermined: dict | None = None
+    if span.rank == n:
+        bracket_generating = True
+    elif final < n:
+        bracket_generating = False
+    else:
+        bracket_generating = None
+    certain = not unsure and span.rank == final
+    invariant = None
+    if bracket_generating is None and not unsure:
+        from nilpotent.core.singular import invariant_hypersurface
+
+        invariant = invariant_hypersurface(sys, p, generic)
+        if invariant is not None:
+            bracket_generating = False
+    if (bracket_generating is None or not certain) and invariant is None:
+        reasons = []
+        if unsure:
+            reasons.append(
+                "some rank decisions at the point could not be certified: "
+                + "; ".join(
+                    f"length {k}: {', '.join(format_word(w) for w in ws)}"
+                    for k, ws in sorted(unsure.items())
+                )
+            )
+        if span.rank < final:
+            why = stopped_by or (
+                "the Hall-word budget (HALL_WORD_BUDGET)" if automatic else "max_length"
+            )
+            reasons.append(
+                f"brackets up to length {limit} span {span.rank} of {final} dimensions at the "
+                f"point (as many as nearby: {final}); the search stopped at {why}"
+            )
+        undetermined = {
+            "max_length": limit,
+            "precision_bits": span.precision_reached or START_PRECISION_BITS,
+            "undetermined_words": {
+                str(k): [format_word(w) for w in ws] for k, ws in sorted(unsure.items())
+            },
+            "reason": "; ".join(reasons),
+            "raise_with": "max_length (CLI --max-length)",
+        }
+    regular: bool | None = growth_t == generic if certain else None
+    if invariant is not None:
+        regular = False  # the brackets span R^n nearby, never at p
+    frame_values = word_values_at(sys, frame, p) if frame else ()
     return Filtration(
         system=sys,
         point=p,
-        bracket_generating=span.rank == n,
+        bracket_generating=bracket_generating,
         growth_vector=growth_t,
         weights=weights,
         step=len(growth_t),
         frame=tuple(frame),
-        frame_values=tuple(values),
-        regular=growth_t == generic,
+        frame_values=tuple(frame_values),
+        regular=regular,
         generic_growth_vector=generic,
         exact=span.exact,
         max_length=limit,
+        undetermined=undetermined,
+        invariant_hypersurface=invariant,
     )
+
+
+def _budget_length(m: int) -> int:
+    """The longest length whose Hall words (all lengths up to it) fit :data:`HALL_WORD_BUDGET`."""
+    total, length = 0, 0
+    while True:
+        count = _witt(m, length + 1)
+        if total + count > HALL_WORD_BUDGET and length >= 2:
+            return length
+        total += count
+        length += 1
 
 
 HALL_WORD_BUDGET = 5000
 """Most Hall words the default ``max_length`` lets :func:`analyze` examine at ``p``."""
-
 
 def default_max_length(n: int, m: int) -> int:
     r"""The default longest bracket length examined at a point.
@@ -684,50 +591,30 @@ def _mobius(k: int) -> int:
 
 
 def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> sp.Expr:
-    """The determinant of the adapted frame's fields, as an expression in the coordinates.
+    """One expression whose zero set is the singular locus near ``filtration``'s point.
 
-    Where this determinant is non-zero the frame words of ``filtration`` (by
-    default ``analyze(sys)`` at the origin) are a basis adapted to the generic
-    filtration, so the point is regular; its zero set therefore *contains* the
-    singular points (it may also contain regular points where another frame
-    would be needed).  Needs a square frame, i.e. a bracket-generating system.
+    The locus is computed from the generic frames
+    (:func:`nilpotent.core.singular.singular_set`: the common zeros of the
+    determinants of every adapted frame of Hall words with the generic
+    weights); this returns its single equation (``1`` when the system is
+    regular everywhere).  ``filtration`` (default ``analyze(sys)``) only
+    supplies the generic growth vector.
 
     Raises
     ------
     ComputationLimitError
-        If a frame field is longer than :data:`SINGULAR_LOCUS_MAX_CHARS`
-        characters (the expanded determinant would be unmanageable).
+        If a frame field is too large to expand.
     NotBracketGeneratingError
-        If the frame is not square (the system is not bracket-generating at the
-        filtration's point).
+        If the system is not bracket-generating at random points.
 
     Examples
     --------
     >>> x1, x2, x3 = sp.symbols("x1 x2 x3")
     >>> martinet = ControlSystem("martinet", (x1, x2, x3), ((1, 0, x2**2 / 2), (0, 1, 0)))
     >>> singular_locus(martinet, analyze(martinet, (0, 1, 0)))
-    -x2
+    x2
     """
+    from nilpotent.core.singular import singular_set
+
     f = filtration if filtration is not None else analyze(sys)
-    if len(f.frame) != sys.n:
-        raise NotBracketGeneratingError(
-            f"the adapted frame of {sys.name!r} at the point has {len(f.frame)} fields for "
-            f"n = {sys.n}: no determinant (the system is not bracket-generating there)"
-        )
-    cols = [word_field_symengine(sys, w) for w in f.frame]
-    sizes = [sum(len(str(e)) for e in col) for col in cols]
-    if max(sizes) > SINGULAR_LOCUS_MAX_CHARS:
-        worst = max(range(len(sizes)), key=sizes.__getitem__)
-        raise ComputationLimitError(
-            f"the singular locus of {sys.name!r} is not expanded: the frame field "
-            f"{format_word(f.frame[worst])} alone has {sizes[worst]:,} characters (limit "
-            f"{SINGULAR_LOCUS_MAX_CHARS:,}), so the {sys.n}x{sys.n} determinant would be far "
-            "larger; analyze points instead (the regular/singular verdict at a point needs "
-            "no determinant)"
-        )
-    mat = se.DenseMatrix(sys.n, sys.n, [cols[k][j] for j in range(sys.n) for k in range(sys.n)])
-    return to_sympy(sys, se.expand(mat.det()))
-
-
-SINGULAR_LOCUS_MAX_CHARS = 20_000
-"""Largest frame column (characters of its components) whose determinant is expanded."""
+    return singular_set(sys, f.generic_growth_vector).equation

@@ -4,18 +4,21 @@ A point (``--at``, ``--from``, ``--to``) names some coordinates of a system;
 the unnamed ones are 0.  Values go through the expression grammar
 (:func:`nilpotent.core.expressions.parse_expression`) with no names but ``pi``
 and ``E``, so they are constants: exact where written exactly (``pi/3``,
-``1/2``, ``sqrt(2)``), floats where written as decimals (``0.5``).  They must
-be finite real numbers.  Commas inside parentheses (``atan2(1, 2)``) belong to
+``1/2``, ``sqrt(2)``); decimals are read as the exact rationals they denote
+(``0.7`` is ``7/10``, ``1e-300`` is ``10**-300``).  They must be finite real
+numbers.  Commas inside parentheses (``atan2(1, 2)``) belong to
 the value.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 
 import sympy as sp
 
 from nilpotent.core.expressions import format_expression, parse_expression, real_value
+from nilpotent.core.spans import exact_decimals
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ExpressionError, ModelError, NilpotentError, PointError
 
@@ -66,8 +69,26 @@ def _assignments(
             real_value(expr, where=place)
         except ExpressionError as exc:
             raise error(str(exc)) from None
-        out.append((name, expr))
+        out.append((name, _exact_decimal_value(value, expr)))
     return out
+
+
+def _exact_decimal_value(text: str, expr: sp.Expr) -> sp.Expr:
+    """``expr`` with its decimals read as the rationals they denote.
+
+    A value that is one decimal literal is read from its text (every digit
+    counts: ``0.1000000000000000000001`` is not rounded to a double); decimals
+    inside a larger expression are read as the shortest decimal of their double.
+    """
+    if not expr.atoms(sp.Float):
+        return expr
+    literal = text.strip()
+    if _DECIMAL.fullmatch(literal):
+        return sp.Rational(literal)
+    return exact_decimals(expr)
+
+
+_DECIMAL = re.compile(r"[+-]?(\d{1,400}\.?\d{0,400}|\.\d{1,400})([eE][+-]?\d{1,3})?")
 
 
 def parse_point(text: str, sys: ControlSystem, *, option: str = "--at") -> tuple[sp.Expr, ...]:

@@ -67,6 +67,7 @@ import sympy as sp
 
 from nilpotent.core.brackets import word_field_symengine
 from nilpotent.core.filtration import Filtration, analyze
+from nilpotent.core.spans import to_double
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
     Poly,
@@ -76,7 +77,12 @@ from nilpotent.core.taylor import (
     weighted_degree,
     weighted_jets,
 )
-from nilpotent.errors import NotBracketGeneratingError, NotPrivilegedError, OptionError
+from nilpotent.errors import (
+    ComputationLimitError,
+    NotBracketGeneratingError,
+    NotPrivilegedError,
+    OptionError,
+)
 
 __all__ = ["METHODS", "PrivilegedCoordinates", "coordinate_names", "privileged_coordinates"]
 
@@ -274,8 +280,8 @@ class _Context:
 
 
 def _to_float(value: sp.Expr) -> sp.Float:
-    """A 15-digit float of an exact value (evaluated by symengine: fast on large expressions)."""
-    return sp.Float(float(to_symengine(value).n()), 15)
+    """A 15-digit float of an exact value (from a certified ball, :func:`spans.to_double`)."""
+    return sp.Float(to_double(value), 15)
 
 
 def _identity(n: int) -> tuple[Poly, ...]:
@@ -548,15 +554,17 @@ def _first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
     flat = [c for f in frame for c in f]
     ys = [Poly.variable(nv, j) for j in range(n)]
     cur = point
-    for _ in range(degree):
-        jets = weighted_jets(flat, ctx.xsyms, cur, wt, degree - 1, ctx.numeric)
+    for it in range(1, degree + 1):
+        # iterate ``it`` is exact to weighted degree ``it``: jets to ``it - 1`` suffice
+        top = min(degree, it)
+        jets = weighted_jets(flat, ctx.xsyms, cur, wt, top - 1, ctx.numeric)
         new = []
         for k in range(n):
             acc = Poly(nv)
             for j in range(n):
                 comp = jets[j * n + k]
                 if comp.terms:
-                    acc = acc + ys[j].mul(comp, wt, degree)
+                    acc = acc + ys[j].mul(comp, wt, top)
             new.append(point[k] + _integrate(acc, n))
         cur = new
     out = []
@@ -590,14 +598,14 @@ def _from_exponential_map(ctx: _Context, E: Sequence[Poly]) -> Built:
     top = 2 * r
     nonlinear = [zE[j] - Poly.variable(n, j) for j in range(n)]  # χ(y) − y
     y = list(_identity(n))
-    for _ in range(top):
-        new = [
-            (Poly.variable(n, j) - nonlinear[j].compose(y, omega, top)).truncate(omega, top)
+    # Fixed point y = z - N(y), N of omega-order >= 2: iterate k is right to omega-degree
+    # k + 1 at least (each substitution gains one degree), so it is truncated there.
+    for k in range(1, top + 1):
+        deg = min(top, k + 1)
+        y = [
+            (Poly.variable(n, j) - nonlinear[j].compose(y, omega, deg)).truncate(omega, deg)
             for j in range(n)
         ]
-        if all(a.terms == b.terms for a, b in zip(new, y, strict=True)):
-            break
-        y = new
     forward = tuple(y[j].truncate(omega, r + w[j]) for j in range(n))
     return forward, tuple(zE), False, r, False, r
 
@@ -666,6 +674,7 @@ def privileged_coordinates(
     filtration: Filtration | None = None,
     *,
     numeric: bool | None = None,
+    max_length: int | None = None,
 ) -> PrivilegedCoordinates:
     r"""Privileged coordinates of ``sys`` at ``point``, with computed orders.
 
@@ -686,6 +695,10 @@ def privileged_coordinates(
         (``cos(1/5)``) or floats, where exact arithmetic cannot simplify
         ($\sin^2 + \cos^2$ is not recognised as 1) and expressions swell; the
         result says which in ``numeric``.
+    max_length:
+        Longest bracket length examined at $p$ (see
+        :func:`~nilpotent.core.filtration.analyze`; default automatic, raised
+        within a budget while the search is exhausted before the dimension).
 
     Returns
     -------
@@ -699,6 +712,9 @@ def privileged_coordinates(
         (the message names each coordinate whose computed order differs from its weight).
     NotBracketGeneratingError
         If the system is not bracket-generating at $p$.
+    ComputationLimitError
+        If whether it is bracket-generating at $p$ stays undetermined within the
+        budget (the message says what was tried and how to search further).
     OptionError
         Unknown method.
 
@@ -715,7 +731,14 @@ def privileged_coordinates(
             f"unknown privileged-coordinates method {method!r}; choose one of "
             f"auto, {', '.join(METHODS)}"
         )
-    f = filtration if filtration is not None else analyze(sys, point)
+    f = filtration if filtration is not None else analyze(sys, point, max_length=max_length)
+    if f.bracket_generating is None:
+        und = f.undetermined or {}
+        raise ComputationLimitError(
+            f"whether {sys.name!r} is bracket-generating at the point is undetermined: "
+            f"{und.get('reason', '')}; no privileged coordinates (search longer brackets "
+            "with max_length, CLI --max-length)"
+        )
     if not f.bracket_generating:
         raise NotBracketGeneratingError(
             f"{sys.name!r} is not bracket-generating at the point: its brackets span "

@@ -128,11 +128,19 @@ class ControlSystem:
 
     @cached_property
     def specialized_fields(self) -> tuple[tuple[Expr, ...], ...]:
-        """The fields with every parameter replaced by its value."""
-        subs = {sp.Symbol(k): v for k, v in self.parameters}
-        if not subs:
-            return self.fields
-        return tuple(tuple(e.subs(subs) for e in f) for f in self.fields)
+        """The fields with every parameter replaced by its value.
+
+        Decimals (in the fields or the parameter values) are read as the exact
+        rationals they denote (``0.7`` is ``7/10``,
+        :func:`nilpotent.core.spans.exact_decimals`), so that every computation
+        on the fields is exact.
+        """
+        from nilpotent.core.spans import exact_decimals
+
+        subs = {sp.Symbol(k): exact_decimals(v) for k, v in self.parameters}
+        return tuple(
+            tuple(exact_decimals(e.subs(subs) if subs else e) for e in f) for f in self.fields
+        )
 
     def specialized(self) -> ControlSystem:
         """The same system with the parameters substituted (and then dropped)."""

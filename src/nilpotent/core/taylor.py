@@ -21,18 +21,21 @@ Weighted Taylor jets (:func:`weighted_jets`)
 Zero tests
     Coefficients are expanded and compared with 0 structurally.  Where a
     coefficient mixes transcendental numbers (``cos(1/5)**2 + sin(1/5)**2 - 1``)
-    the structural test can miss a zero; :class:`ZeroTest` then decides from a
-    50-digit evaluation and counts such numeric decisions so that results can
-    say they were not decided exactly.
+    the structural test can miss a zero; :class:`ZeroTest` then asks the rank
+    engine (:func:`nilpotent.core.spans.is_zero`: exact or certified) and counts
+    the zeros it could not prove, so that results can say they were not decided
+    exactly.
 """
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Iterable, Mapping, Sequence
 
 import symengine as se
 import sympy as sp
 
+from nilpotent.core.spans import is_zero, to_double
 from nilpotent.errors import PointError
 
 Monomial = tuple[int, ...]
@@ -69,8 +72,12 @@ class ZeroTest:
     """Decide whether an exact coefficient is zero.
 
     Structural first (symengine's canonical form after expansion); where that
-    leaves a non-number, the value at :attr:`digits` digits decides; a float
-    is zero below :attr:`float_tolerance` in absolute value.
+    leaves a constant that is not a number, :func:`nilpotent.core.spans.is_zero`
+    decides (exact for rational and algebraic values, a certified ball proves a
+    nonzero); a constant that stays within a ball around 0 at
+    :data:`~nilpotent.core.spans.MAX_PRECISION_BITS` bits without an exact proof
+    counts as 0 and as a numerical decision.  A float (a value computed in
+    floating point) is zero below :attr:`float_tolerance` in absolute value.
     :attr:`numeric_decisions` counts the coefficients decided zero numerically.
     """
 
@@ -90,13 +97,14 @@ class ZeroTest:
             return False
         if c.is_Number:
             return False
-        value = sp.N(c._sympy_(), self.digits)
-        if not value.is_number:
+        if c.free_symbols:
             return False
-        if abs(complex(value)) < 10 ** (-(self.digits - 10)):
+        # the one rank engine: exact (rational, algebraic) or a certified nonzero ball
+        verdict = is_zero(c)
+        if verdict is None:  # 0 to 1024 bits but not provably: a numerical decision
             self.numeric_decisions += 1
             return True
-        return False
+        return verdict
 
 
 class Poly:
@@ -237,17 +245,27 @@ class Poly:
     def mul(
         self, other: Poly, weights: Sequence[int] | None = None, degree: int | None = None
     ) -> Poly:
-        """The product, truncated at weighted ``degree`` when given."""
+        """The product, truncated at weighted ``degree`` when given.
+
+        With a truncation, the terms of ``other`` are visited by increasing
+        weighted degree and the scan stops at the first pair beyond ``degree``.
+        """
         terms: dict[Monomial, se.Basic] = {}
-        if degree is not None:
+        if degree is None:
+            pairs_b = [(0, mb, cb) for mb, cb in other.terms.items()]
+            items_a = [(0, ma, ca) for ma, ca in self.terms.items()]
+        else:
             assert weights is not None
-            da = {m: weighted_degree(m, weights) for m in self.terms}
-            db = {m: weighted_degree(m, weights) for m in other.terms}
-        for ma, ca in self.terms.items():
-            for mb, cb in other.terms.items():
-                if degree is not None and da[ma] + db[mb] > degree:
-                    continue
-                m = tuple(a + b for a, b in zip(ma, mb, strict=True))
+            items_a = [(weighted_degree(m, weights), m, c) for m, c in self.terms.items()]
+            pairs_b = sorted(
+                ((weighted_degree(m, weights), m, c) for m, c in other.terms.items()),
+                key=lambda t: t[0],
+            )
+        for da, ma, ca in items_a:
+            for db, mb, cb in pairs_b:
+                if degree is not None and da + db > degree:
+                    break
+                m = tuple(map(operator.add, ma, mb))
                 v = ca * cb
                 terms[m] = terms[m] + v if m in terms else v
         return Poly(self.nvars, terms)
@@ -313,6 +331,16 @@ class Poly:
         With ``keep_factors`` the products are not evaluated, so a float coefficient is
         not distributed over a factor such as ``(x - 1/3)`` (which would round ``1/3``).
         """
+        if not keep_factors:
+            # built by symengine (fast on thousands of terms), converted once
+            ses = [se.S(x) for x in symbols]
+            total = se.Add(
+                *[
+                    se.Mul(c, *[x**a for x, a in zip(ses, m, strict=True) if a])
+                    for m, c in sorted(self.terms.items())
+                ]
+            )
+            return sp.S(total)
         out = []
         for m, c in sorted(self.terms.items()):
             f: list[sp.Expr] = [c._sympy_()]
@@ -455,5 +483,8 @@ def weighted_jets(
             ) from exc
         out.append(acc.truncate(weights, degree))
     if numeric:
-        out = [Poly(p.nvars, {m: c.n() for m, c in p.terms.items()}) for p in out]
+        out = [
+            Poly(p.nvars, {m: se.RealDouble(to_double(c)) for m, c in p.terms.items()})
+            for p in out
+        ]
     return out

@@ -79,10 +79,9 @@ class LocalModel:
 
 
 def _rank(mat: np.ndarray) -> int:
-    if mat.size == 0:
-        return 0
-    sv = np.linalg.svd(mat, compute_uv=False)
-    return int(np.sum(sv > RANK_TOL * max(sv[0], 1e-300)))
+    from nilpotent.core.spans import numeric_rank  # the one rank engine (scale-invariant)
+
+    return numeric_rank(mat.T, RANK_TOL) if mat.size else 0
 
 
 def _values(compiled: CompiledSystem, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
