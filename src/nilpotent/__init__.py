@@ -62,6 +62,13 @@ _LAZY: dict[str, str] = {
     "amplitude_range": "nilpotent.sweep",
     # steering, pictures, the paper
     "plan": "nilpotent.planning",
+    "plan_global": "nilpotent.planning.global_planner",
+    "GlobalPlan": "nilpotent.planning.global_planner",
+    "World": "nilpotent.planning.world",
+    "load_world": "nilpotent.planning.world",
+    "execute_plan": "nilpotent.planning.execute",
+    "Limits": "nilpotent.core.outline",
+    "Outline": "nilpotent.core.outline",
     "Plan": "nilpotent.planning",
     "steer_nilpotent": "nilpotent.planning",
     "reproduce": "nilpotent.report",

@@ -32,6 +32,7 @@ import sympy as sp
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
+from nilpotent.models.outlines import with_builtin_constraints
 from nilpotent.models.trailers import car_trailers
 from nilpotent.models.trident import (
     TridentGeometry,
@@ -235,6 +236,7 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                 f"model {spec!r} needs its argument: {info.usage} (e.g. {info.example_spec})"
             )
         system = info.build(_parse_argument(spec, info, arg))
+    system = with_builtin_constraints(system)  # outline and default limits (planning)
     if params:
         system = system.with_parameters(dict(params))
     if info.positive_parameters:
@@ -244,6 +246,34 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                     f"model {spec!r}: parameter {key} must be a positive number, got {value}"
                 )
     return system
+
+
+def _shown(text: str, limit: int = 200) -> str:
+    clean = "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
+    if len(clean) <= limit:
+        return clean
+    return clean[:limit] + f"... ({len(clean) - limit} more characters)"
+
+
+def _file_problem(path: Path) -> str | None:
+    """Why ``path`` cannot be opened as a file, in words (None: it can be looked at)."""
+    import errno
+    import os
+
+    try:
+        os.stat(path)
+    except FileNotFoundError:
+        if os.path.islink(path):
+            return f"is a broken symbolic link (its target {_shown(os.readlink(path))!r} " \
+                   "does not exist)"
+        return "not found"
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a symbolic link loop (it never reaches a file)"
+        if exc.errno == errno.ENAMETOOLONG:
+            return "has a name too long for the file system"
+        return f"cannot be read ({exc.strerror or type(exc).__name__})"
+    return None
 
 
 def load_system(spec: str, params: Mapping[str, object] | None = None) -> ControlSystem:
@@ -266,14 +296,17 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
     """
     if spec.partition(":")[0].strip() in MODELS:
         return get_model(spec, params)
+    if not spec.strip():
+        raise ModelError(f"empty model name (known models: {_known()}; or a .toml/.json file)")
     path = Path(spec)
-    if path.suffix.lower() not in _MODEL_FILE_SUFFIXES and not path.exists():
+    problem = _file_problem(path)
+    if path.suffix.lower() not in _MODEL_FILE_SUFFIXES and problem == "not found":
         raise ModelError(
-            f"unknown model {spec!r}: not a built-in (known models: {_known()}) "
+            f"unknown model {_shown(spec)!r}: not a built-in (known models: {_known()}) "
             "and not a model file (.toml or .json)"
         )
-    if not path.exists():
-        raise ModelError(f"model file {spec!r} not found")
+    if problem is not None:
+        raise ModelError(f"model file {_shown(spec)!r} {problem}")
     from nilpotent.core.modelfile import load_model_file  # lazy: written alongside
 
     system = load_model_file(path)

@@ -118,6 +118,10 @@ def _execute_dask(func: Callable[[Any], Any], tasks: Sequence[Any], sizes: Seque
                 client = distributed.Client(dask)
             except (OSError, TimeoutError, ValueError) as exc:
                 raise OptionError(f"cannot reach the Dask scheduler at {dask!r}: {exc}") from None
+            except MemoryError:  # something answered, but not a Dask scheduler
+                raise OptionError(
+                    f"the server at {dask!r} did not answer as a Dask scheduler"
+                ) from None
         own_client = True
     else:
         client = dask
