@@ -151,9 +151,9 @@ def versions(backend: str) -> dict[str, str]:
     """Versions of Python, nilpotent and the numeric packages (plus Dask's on Dask)."""
     from importlib import metadata
 
-    import nilpotent
+    from nilpotent.version import __version__
 
-    out = {"python": sys.version.split()[0], "nilpotent": nilpotent.__version__}
+    out = {"python": sys.version.split()[0], "nilpotent": __version__}
     names = ["numpy", "sympy", "symengine", "numba"]
     if backend == "dask":
         names += ["dask", "distributed"]
