@@ -44,9 +44,7 @@ KNOWN_OVERSIZE: dict[str, str] = {
     "core/privileged.py": "issue 11: to split (coordinates / constructions)",
 }
 KNOWN_UPWARD: dict[tuple[str, str], str] = {}
-KNOWN_COMMAND_IMPORTS: dict[tuple[str, str], str] = {
-    ("cmd_execute.py", "cmd_plan"): "issue 12's command: shared plan output to move to cli/",
-}
+KNOWN_COMMAND_IMPORTS: dict[tuple[str, str], str] = {}
 
 
 def _modules() -> list[Path]:
