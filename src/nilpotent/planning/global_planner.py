@@ -387,7 +387,7 @@ def plan_global(
     max_piece:
         Longest piece steered at once (configuration-space Euclidean length).
     engine:
-        Integration engine (:data:`nilpotent.planning.simulation.ENGINES`).
+        Integration engine (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
     direct:
         Try the single nilpotent plan first (see the module doc).
     anchor, max_iterations:

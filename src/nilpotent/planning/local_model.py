@@ -24,7 +24,7 @@ Two builders (registry :data:`BUILDERS`):
 ``"symbolic"`` (any step)
     :func:`nilpotent.core.approximation.approximate` at the point (exact
     symbolic work, cached per point), its fields converted to floats and its
-    coordinate maps compiled with ``lambdify``.
+    coordinate maps compiled by :func:`nilpotent.numeric.compile.compile_map`.
 
 Regularity is checked numerically: the growth vector at ``p`` (ranks of the
 fields and of fields plus brackets, relative singular-value tolerance
@@ -41,11 +41,9 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.expressions import as_expr
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NotBracketGeneratingError, PlanningError, SingularPointError
-from nilpotent.numeric.compile import CompiledSystem, compile_system
-from nilpotent.numeric.types import State
+from nilpotent.numeric.compile import CompiledSystem, compile_map, compile_system
 from nilpotent.planning.triangular import TriangularSystem
 
 #: Relative tolerance on singular values deciding numerical ranks.
@@ -83,7 +81,7 @@ class LocalModel:
 def _rank(mat: np.ndarray) -> int:
     from nilpotent.core.spans import numeric_rank  # the one rank engine (scale-invariant)
 
-    return numeric_rank(mat.T.tolist(), RANK_TOL) if mat.size else 0
+    return numeric_rank(mat.T, RANK_TOL) if mat.size else 0
 
 
 def _values(compiled: CompiledSystem, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -107,14 +105,10 @@ def numeric_growth(compiled: CompiledSystem, p: np.ndarray) -> tuple[int, int]:
     return _rank(fields), _rank(np.hstack([fields, brackets]))
 
 
-@lru_cache(maxsize=64)
-def _compiled(system: ControlSystem) -> CompiledSystem:
-    return compile_system(system)
-
-
 def compiled_system(system: ControlSystem) -> CompiledSystem:
-    """The compiled fields of ``system`` (parameters substituted; memoised)."""
-    return _compiled(system)
+    """The compiled fields of ``system`` (parameters substituted; memoised by
+    :func:`~nilpotent.numeric.compile.compile_system`)."""
+    return compile_system(system)
 
 
 def generic_growth(compiled: CompiledSystem, p: np.ndarray, seed: int = 0) -> tuple[int, int]:
@@ -128,9 +122,7 @@ def generic_growth(compiled: CompiledSystem, p: np.ndarray, seed: int = 0) -> tu
     return best
 
 
-def check_regular(
-    system: ControlSystem, point: Sequence[float] | State, what: str
-) -> tuple[int, int]:
+def check_regular(system: ControlSystem, point: Sequence[float], what: str) -> tuple[int, int]:
     """Raise :class:`SingularPointError` if ``point`` is singular for the first two steps.
 
     Returns ``(n_1, n_2)`` at the point.
@@ -152,7 +144,7 @@ def _fmt(p: np.ndarray) -> str:
     return "(" + ", ".join(f"{v:.6g}" for v in p) + ")"
 
 
-def numeric_model(system: ControlSystem, point: Sequence[object] | State) -> LocalModel:
+def numeric_model(system: ControlSystem, point: Sequence[object]) -> LocalModel:
     """The step-2 nilpotent approximation at ``point`` in linear adapted coordinates (floats).
 
     Raises
@@ -223,7 +215,7 @@ def numeric_model(system: ControlSystem, point: Sequence[object] | State) -> Loc
     return LocalModel(tuple(p), tri, forward, inverse, growth, "numeric")
 
 
-def exact_point(point: Sequence[object] | State) -> tuple[sp.Expr, ...]:
+def exact_point(point: Sequence[object]) -> tuple[sp.Expr, ...]:
     """The point as exact sympy numbers: exact values kept, floats by their shortest decimal."""
     out = []
     for v in point:
@@ -234,12 +226,12 @@ def exact_point(point: Sequence[object] | State) -> tuple[sp.Expr, ...]:
     return tuple(out)
 
 
-def symbolic_model(system: ControlSystem, point: Sequence[object] | State) -> LocalModel:
+def symbolic_model(system: ControlSystem, point: Sequence[object]) -> LocalModel:
     """The nilpotent approximation of :func:`nilpotent.core.approximation.approximate` at ``point``.
 
     The point is made exact (:func:`exact_point`) and the symbolic work is
     cached per (system, point); the result is converted to a
-    :class:`TriangularSystem` and lambdified coordinate maps.
+    :class:`TriangularSystem` and compiled coordinate maps.
     """
     return _symbolic_model(system, exact_point(point))
 
@@ -263,30 +255,23 @@ def _symbolic_model(system: ControlSystem, point: tuple[sp.Expr, ...]) -> LocalM
     names = tuple(approx.coordinates.names)
     tri = TriangularSystem.from_fields(approx.fields, names, tuple(filt.weights))
     params = {sp.Symbol(k): v for k, v in system.parameters}
-    fwd_exprs = [as_expr(e).xreplace(params) for e in approx.coordinates.forward]
-    inv_exprs = [as_expr(e).xreplace(params) for e in approx.coordinates.inverse]
-    fwd = sp.lambdify([system.coordinates], fwd_exprs, "numpy")
-    inv = sp.lambdify([names], inv_exprs, "numpy")
-
-    def forward(x: np.ndarray) -> np.ndarray:
-        return np.asarray(fwd(np.asarray(x, dtype=float)), dtype=float).reshape(-1)
-
-    def inverse(y: np.ndarray) -> np.ndarray:
-        return np.asarray(inv(np.asarray(y, dtype=float)), dtype=float).reshape(-1)
-
+    forward = compile_map(system.coordinates, approx.coordinates.forward, params,
+                          name=f"{system.name}-forward")
+    inverse = compile_map(names, approx.coordinates.inverse, params,
+                          name=f"{system.name}-inverse")
     return LocalModel(
         tuple(fpoint), tri, forward, inverse, tuple(filt.growth_vector), "symbolic"
     )
 
 
 #: Local-model builders by name.
-BUILDERS: dict[str, Callable[[ControlSystem, Sequence[object] | State], LocalModel]] = {
+BUILDERS: dict[str, Callable[[ControlSystem, Sequence[object]], LocalModel]] = {
     "numeric": numeric_model,
     "symbolic": symbolic_model,
 }
 
 
-def choose_builder(system: ControlSystem, point: Sequence[float] | State) -> str:
+def choose_builder(system: ControlSystem, point: Sequence[float]) -> str:
     """``"numeric"`` where the system has step ≤ 2 generically near ``point``.
 
     That is, fields and first brackets span the space at random points nearby

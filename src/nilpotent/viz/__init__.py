@@ -4,6 +4,10 @@
 * :mod:`~nilpotent.viz.motion` — bracket motions (the paper's Figs 2–7);
 * :mod:`~nilpotent.viz.animation` — GIF / MP4 / self-contained HTML animations;
 * :mod:`~nilpotent.viz.scaling` — error against amplitude, log–log, fitted slopes;
+* :mod:`~nilpotent.viz.simulation` — trajectories, comparisons, scaling studies and
+  sweeps (their ``.plot()`` methods delegate here);
+* :mod:`~nilpotent.viz.plan` — plans: the path (the robot for the trident
+  snake), errors per iteration and inputs; GIF animation;
 * :mod:`~nilpotent.viz.singular` — the singular set of the paper's eq. vf;
 * :mod:`~nilpotent.viz.report_figures` — multi-panel figures of the paper reproduction;
 * :mod:`~nilpotent.viz.export` — saving a figure as PNG + SVG (or PDF).

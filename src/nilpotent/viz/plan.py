@@ -1,4 +1,5 @@
-"""Figures and animations of a :class:`~nilpotent.planning.iterative.Plan`.
+"""Figures and animations of a :class:`~nilpotent.planning.iterative.Plan`
+(:meth:`Plan.plot <nilpotent.planning.iterative.Plan.plot>` delegates here).
 
 For the trident snake forms the robot is drawn with
 :func:`nilpotent.viz.robot.draw_trident` (geometry from
@@ -14,12 +15,15 @@ Functions return figure handles and never call ``plt.show()``.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from nilpotent.planning.controls import input_at
-from nilpotent.planning.iterative import Plan
+
+if TYPE_CHECKING:
+    from nilpotent.planning.iterative import Plan
 
 _TRIDENT_FORMS = ("trident-snake", "trident-snake-paper", "trident-snake-joints")
 
