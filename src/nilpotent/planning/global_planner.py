@@ -586,10 +586,17 @@ def plan_global(
         if p is None or (final and not p.converged):
             off = float(np.linalg.norm(x - prev))
             if length == 0.0:
-                raise PlanningError(
-                    f"cannot steer back onto the path at {np.array2string(w, precision=3)} "
-                    f"from {off:.3g} away inside the free space and limits"
-                )
+                # cannot steer back onto the path: continue from the state reached when the
+                # straight chord from it to the next waypoint is admissible (the path is
+                # re-anchored there; every motion is still checked), else give up
+                targets.popleft()
+                if not targets or not _chord_valid(checker.valid, x, targets[0][0]):
+                    raise PlanningError(
+                        f"cannot steer back onto the path at {np.array2string(w, precision=3)} "
+                        f"from {off:.3g} away inside the free space and limits"
+                    )
+                prev = x.copy()
+                continue
             if off > max(tol, MID_TOL_FRACTION * length):
                 # the state reached is far off the path relative to this piece: back onto it
                 targets.appendleft((prev.copy(), halvings))
