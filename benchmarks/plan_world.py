@@ -17,7 +17,7 @@ Methods, same time budget per query:
   = a plan returned (it is verified: re-simulated, admissible, within tol);
 * ``krrt``: OMPL's kinodynamic planner with piecewise constant controls in
   ``[-1, 1]^m`` propagated by our compiled integrator (numba DOP853 through
-  :func:`nilpotent.numeric.integrators.integrate`), the same validity checker;
+  :func:`nilpotent.numeric.integrate.integrate`), the same validity checker;
   success = an exact solution within the goal radius ``KIN_GOAL`` (far coarser
   than ``ours``' tol: sampling-based kinodynamic planners cannot steer
   exactly).  The issue asked for ``ompl.control.SST``, but the PyPI OMPL 2.0
@@ -44,8 +44,8 @@ import numpy as np
 
 from nilpotent.errors import NilpotentError
 from nilpotent.models import get_model
-from nilpotent.numeric.inputs import HarmonicInputs
-from nilpotent.numeric.integrators import integrate
+from nilpotent.numeric.integrate import integrate
+from nilpotent.numeric.signals import Signal
 from nilpotent.planning.global_planner import plan_global
 from nilpotent.planning.local_model import compiled_system
 from nilpotent.planning.verify import Checker
@@ -148,8 +148,8 @@ def run_kinodynamic(system, checker: Checker, start, goal, budget: float, seed: 
     def propagate(state, control, duration, result) -> None:
         x = np.array([state[j] for j in range(n)])
         u = np.array([control[i] for i in range(m)])
-        inputs = HarmonicInputs(np.array([[duration]]), np.zeros((1, 1)), u[None, None, :],
-                                zeros, zeros)
+        inputs = Signal(np.array([[duration]]), np.zeros((1, 1)), u[None, None, :],
+                        zeros, zeros)
         sol = integrate(compiled, x[None, :], inputs, engine=ENGINE, rtol=1e-8, atol=1e-10)
         y = np.asarray(sol.final)[0]
         for j in range(n):

@@ -21,7 +21,7 @@ from nilpotent.cli.app import (
     stdout_console,
     work,
 )
-from nilpotent.cli.cmd_plan import (
+from nilpotent.cli.plan_options import (
     ClearanceOpt,
     FromOpt,
     LimitOpt,

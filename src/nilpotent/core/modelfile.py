@@ -494,6 +494,11 @@ def load_model_file(path: str | Path) -> ControlSystem:
 
     The model's name defaults to the file's stem.
 
+    Parameters
+    ----------
+    path : str or Path
+        The model file (format: ``INTERFACE.md``).
+
     Raises
     ------
     ModelError

@@ -415,7 +415,7 @@ def steer_admissible(
 
 
 def plan_global(
-    system: ControlSystem,
+    sys: ControlSystem,
     start: Sequence[object],
     goal: Sequence[object],
     tol: float = 1e-8,
@@ -438,7 +438,7 @@ def plan_global(
 
     Parameters
     ----------
-    system:
+    sys : ControlSystem
         The model; its ``geometry`` (outline) is needed with a ``world``.
     start, goal:
         Configurations (model coordinates).
@@ -457,7 +457,7 @@ def plan_global(
     max_piece:
         Longest piece steered at once (configuration-space Euclidean length).
     engine:
-        Integration engine (:data:`nilpotent.planning.simulation.ENGINES`).
+        Integration engine (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
     direct:
         Try the single nilpotent plan first (see the module doc).
     anchor, max_iterations:
@@ -496,7 +496,7 @@ def plan_global(
         raise PlanningError(f"max_piece must be > 0, got {max_piece}")
     options: dict[str, Any] = {"engine": engine, "anchor": anchor,
                                "max_iterations": max_iterations}
-    checker = Checker(system, world, limits, singular_margin, clearance)
+    checker = Checker(sys, world, limits, singular_margin, clearance)
     assert checker.limits is not None
     x0 = np.array([float(v) for v in start])  # type: ignore[arg-type]
     xg = np.array([float(v) for v in goal])  # type: ignore[arg-type]
@@ -519,7 +519,7 @@ def plan_global(
                 f"the re-simulated plan misses the goal by {v.error:.3g} > tol {tol:g}"
             )
         whole = Plan(
-            system=system, start=tuple(x0), goal=tuple(xg), segments=tuple(segments),
+            system=sys, start=tuple(x0), goal=tuple(xg), segments=tuple(segments),
             reached=v.reached, error=v.error, iterations=tuple(iterations),
             trajectory=Trajectory(v.times, v.states), tol=tol, anchor=last.anchor,
             builder=last.builder, initial_error=float(np.linalg.norm(xg - x0)),
@@ -533,7 +533,7 @@ def plan_global(
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
     if direct and near and _chord_valid(checker.valid, x0, xg):
-        p = steer_admissible(system, checker, x0, xg, tol, options, endpoints_singular_raise=True)
+        p = steer_admissible(sys, checker, x0, xg, tol, options, endpoints_singular_raise=True)
         if p is not None and p.converged:
             piece = Piece(tuple(xg), 0, len(p.segments), p.error, len(p.iterations), 0)
             try:
@@ -582,7 +582,7 @@ def plan_global(
         final = len(targets) == 1
         length = float(np.linalg.norm(w - prev))
         piece_tol = tol if final else max(tol, min(MID_TOL, MID_TOL_FRACTION * length))
-        p = steer_admissible(system, checker, x, w, piece_tol, options)
+        p = steer_admissible(sys, checker, x, w, piece_tol, options)
         if p is None or (final and not p.converged):
             off = float(np.linalg.norm(x - prev))
             if length == 0.0:

@@ -217,6 +217,11 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
 def load_world(path: str | Path) -> World:
     """Read a TOML world file (module doc).
 
+    Parameters
+    ----------
+    path : str or Path
+        The world file (TOML).
+
     Raises
     ------
     WorldError
