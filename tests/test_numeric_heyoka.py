@@ -101,3 +101,63 @@ def test_threads_give_the_same_end_points(snake):
     two = integrate(snake, x0, inputs, engine="heyoka", threads=2)
     np.testing.assert_array_equal(one.final, two.final)
     np.testing.assert_array_equal(one.steps, two.steps)
+
+
+def test_threads_identical_with_failures_and_many_batches():
+    # dx/dt = u x^2 blows up at t = 1/x0: lanes with x0 > 1 fail in several SIMD batches,
+    # the others succeed; 1, 2 and 3 threads give bit-identical end points and steps
+    x = sp.Symbol("x")
+    cs = compile_fields([x], [[x**2]], name="riccati-threads")
+    rng = np.random.default_rng(4)
+    x0 = rng.uniform(0.05, 0.9, (203, 1))
+    x0[::17, 0] = 2.0  # blow-up before t = 1
+    runs = [integrate(cs, x0, _constant_input(1.0).broadcast(203), engine="heyoka",
+                      rtol=1e-12, atol=1e-12, bound=1e6, threads=t) for t in (1, 2, 3)]
+    fails = np.zeros(203, dtype=bool)
+    fails[::17] = True
+    for sol in runs:
+        assert np.all(sol.status[fails] != Status.SUCCESS)
+        assert np.all(sol.status[~fails] == Status.SUCCESS)
+        np.testing.assert_allclose(sol.final[~fails, 0],
+                                   x0[~fails, 0] / (1 - x0[~fails, 0]), rtol=1e-10)
+    for sol in runs[1:]:
+        np.testing.assert_array_equal(sol.status, runs[0].status)
+        np.testing.assert_array_equal(sol.final[~fails], runs[0].final[~fails])
+        np.testing.assert_array_equal(sol.steps[~fails], runs[0].steps[~fails])
+
+
+def test_lean_path_equals_general_path(snake):
+    # end points only (the lean loop) against the same batch with sample times (the general
+    # per-event path): the same integrator steps, so the same end points
+    rng = np.random.default_rng(5)
+    x0 = rng.uniform(-0.1, 0.1, (40, 6))
+    inputs = bracket_inputs(3, 1, 3, rng.uniform(0.01, 0.3, 40))
+    lean = integrate(snake, x0, inputs, engine="heyoka", threads=2)
+    general = integrate(snake, x0, inputs, engine="heyoka", times=[0.0], threads=2)
+    np.testing.assert_array_equal(lean.final, general.final)
+    np.testing.assert_array_equal(lean.steps, general.steps)
+
+
+def test_unused_parameters_left_out_change_nothing(snake):
+    # the integrator specialised to the inputs in use (u_2 = 0 dropped) against the one with
+    # every parameter: equal end points up to rounding
+    rng = np.random.default_rng(6)
+    x0 = rng.uniform(-0.1, 0.1, (16, 6))
+    sig = bracket_inputs(3, 1, 3, rng.uniform(0.01, 0.3, 16))
+    lean = integrate(snake, x0, sig, engine="heyoka")
+    tol = heyoka_engine.heyoka_tolerance(1e-10, 1e-12)
+    integ = heyoka_engine.taylor_integrator(snake, sig.harmonics, tol, None)
+    assert integ.parameters == 1 + 3 * (1 + 2 * sig.harmonics)
+    ta = integ.template
+    pars = heyoka_engine._parameters(sig)
+    out = np.empty((16, 6))
+    bs = integ.batch_size
+    for lo in range(0, 16, bs):
+        hi = min(lo + bs, 16)
+        lanes = lo + np.arange(bs) % (hi - lo)
+        ta.state[:] = x0[lanes].T
+        ta.pars[:] = pars[lanes, 0].T
+        ta.set_time(np.zeros(bs))
+        ta.propagate_until(np.full(bs, 2 * np.pi))
+        out[lo:hi] = ta.state[:, : hi - lo].T
+    assert np.abs(lean.final - out).max() < 1e-13
