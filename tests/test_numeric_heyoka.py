@@ -103,6 +103,22 @@ def test_threads_give_the_same_end_points(snake):
     np.testing.assert_array_equal(one.steps, two.steps)
 
 
+def test_a_trajectory_does_not_depend_on_its_batch(snake):
+    # rows with brackets (1,2) and (2,3) mixed in one batch (two specialised integrators)
+    # give bit-identical end points to the same rows integrated in batches of their own
+    rng = np.random.default_rng(8)
+    x0 = rng.uniform(-0.1, 0.1, (30, 6))
+    amps = rng.uniform(0.01, 0.3, 30)
+    ii = np.where(np.arange(30) % 3 == 0, 2, 1)
+    jj = np.where(np.arange(30) % 3 == 0, 3, 2)
+    mixed = integrate(snake, x0, bracket_inputs(3, ii, jj, amps), engine="heyoka")
+    for i, j in ((1, 2), (2, 3)):
+        rows = np.flatnonzero(ii == i)
+        alone = integrate(snake, x0[rows], bracket_inputs(3, i, j, amps[rows]),
+                          engine="heyoka")
+        np.testing.assert_array_equal(mixed.final[rows], alone.final)
+
+
 def test_threads_identical_with_failures_and_many_batches():
     # dx/dt = u x^2 blows up at t = 1/x0: lanes with x0 > 1 fail in several SIMD batches,
     # the others succeed; 1, 2 and 3 threads give bit-identical end points and steps
@@ -127,15 +143,17 @@ def test_threads_identical_with_failures_and_many_batches():
 
 
 def test_lean_path_equals_general_path(snake):
-    # end points only (the lean loop) against the same batch with sample times (the general
-    # per-event path): the same integrator steps, so the same end points
+    # full SIMD batches (the lean loop) against the same trajectories one at a time (a
+    # padded batch: the general per-event path); the lanes are independent, so the end
+    # points and step counts are the same
     rng = np.random.default_rng(5)
-    x0 = rng.uniform(-0.1, 0.1, (40, 6))
-    inputs = bracket_inputs(3, 1, 3, rng.uniform(0.01, 0.3, 40))
-    lean = integrate(snake, x0, inputs, engine="heyoka", threads=2)
-    general = integrate(snake, x0, inputs, engine="heyoka", times=[0.0], threads=2)
-    np.testing.assert_array_equal(lean.final, general.final)
-    np.testing.assert_array_equal(lean.steps, general.steps)
+    x0 = rng.uniform(-0.1, 0.1, (16, 6))
+    amps = rng.uniform(0.01, 0.3, 16)
+    lean = integrate(snake, x0, bracket_inputs(3, 1, 3, amps), engine="heyoka", threads=2)
+    for k in range(16):
+        one = integrate(snake, x0[k], bracket_inputs(3, 1, 3, amps[k]), engine="heyoka")
+        np.testing.assert_array_equal(lean.final[k], one.final[0])
+        assert lean.steps[k] == one.steps[0]
 
 
 def test_unused_parameters_left_out_change_nothing(snake):
@@ -161,3 +179,19 @@ def test_unused_parameters_left_out_change_nothing(snake):
         ta.propagate_until(np.full(bs, 2 * np.pi))
         out[lo:hi] = ta.state[:, : hi - lo].T
     assert np.abs(lean.final - out).max() < 1e-13
+
+
+def test_samples_at_start_and_end_take_the_lean_path_unchanged(snake):
+    # samples at 0 and at the end only (the lean loop) against samples that also stop
+    # half-way (the general path): the start and end samples agree; the end is the final
+    rng = np.random.default_rng(7)
+    x0 = rng.uniform(-0.1, 0.1, (37, 6))
+    inputs = bracket_inputs(3, 1, 2, rng.uniform(0.01, 0.3, 37))
+    end = float(inputs.total_durations.min())
+    lean = integrate(snake, x0, inputs, engine="heyoka", times=[0.0, end], threads=2)
+    general = integrate(snake, x0, inputs, engine="heyoka", times=[0.0, end / 2, end],
+                        threads=1)
+    np.testing.assert_array_equal(lean.samples[:, 0], x0)
+    np.testing.assert_array_equal(lean.samples[:, 1], lean.final)
+    assert np.abs(lean.final - general.samples[:, 2]).max() < 1e-12
+    np.testing.assert_array_equal(general.samples[:, 2], general.final)

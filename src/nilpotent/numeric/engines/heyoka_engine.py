@@ -286,21 +286,58 @@ def run_heyoka(
     parameters, time), so the results do not depend on the number of threads
     or on which thread ran a batch.
 
-    The common case (one segment, no sample times, full SIMD batches) runs a
-    lean loop: load the batch, propagate, store the end state, the steps and
-    the lanes' end times; afterwards one vectorised check finds batches in
+    Each trajectory runs on the integrator specialised to the parameters its
+    own control uses (:func:`_rhs`): trajectories are grouped by that set, so
+    a trajectory's result does not depend on the others in the batch.
+
+    The common case (one segment, sample times only at 0 and at the end, full
+    SIMD batches) runs a lean loop: load the batch, propagate, store the end
+    state, the steps and the lanes' end times; afterwards one vectorised check finds batches in
     which a lane failed (stopped early, too many steps, non-finite, beyond
     ``bound``) and integrates those again on the general path
     (:func:`_run_chunk`), which stops and reports the failing lanes.
     """
     pars = _parameters(sig)
-    used = (True, *(bool(u) for u in np.any(pars[..., 1:] != 0, axis=(0, 1))))
-    integ = taylor_integrator(system, sig.harmonics, heyoka_tolerance(rtol, atol), used)
+    ends = np.cumsum(sig.durations, axis=1)
+    tol = heyoka_tolerance(rtol, atol)
+    row_used = np.any(pars[..., 1:] != 0, axis=1)  # (B, npar - 1)
+    kinds, which = np.unique(row_used, axis=0, return_inverse=True)
+    which = np.ravel(which)
+    groups = []
+    for g, kind in enumerate(kinds):
+        used = (True, *(bool(u) for u in kind))
+        rows = np.flatnonzero(which == g) if kinds.shape[0] > 1 else None
+        groups.append((taylor_integrator(system, sig.harmonics, tol, used), rows))
+    if len(groups) == 1:
+        return _run_group(groups[0][0], xs, pars, ends, ts, max_steps, bound, threads)
+    final = np.empty(xs.shape)
+    samples = np.empty((xs.shape[0], ts.size, xs.shape[1]))
+    info = np.empty((xs.shape[0], 4))
+    for integ, rows in groups:
+        final[rows], samples[rows], info[rows] = _run_group(
+            integ, xs[rows], pars[rows], ends[rows], ts, max_steps, bound, threads)
+    return final, samples, info
+
+
+def _run_group(
+    integ: TaylorIntegrator,
+    xs: np.ndarray,
+    pars: np.ndarray,
+    ends: np.ndarray,
+    ts: np.ndarray,
+    max_steps: int,
+    bound: float,
+    threads: int | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`run_heyoka` for trajectories that all run on ``integ``.
+
+    ``pars`` ``(B, S, npar)`` (:func:`_parameters`), ``ends`` ``(B, S)`` the
+    segments' global end times.
+    """
     pars = np.ascontiguousarray(pars[..., : integ.parameters])
     batch, n = xs.shape
     bs = integ.batch_size
-    ends = np.cumsum(sig.durations, axis=1)
-    segs = sig.segment_count
+    segs = ends.shape[1]
     final = np.full((batch, n), np.nan)
     samples = np.full((batch, ts.size, n), np.nan)
     info = np.zeros((batch, 4))
@@ -316,7 +353,10 @@ def run_heyoka(
     order = np.argsort(evt_time, axis=1, kind="stable")
     evt_time = np.take_along_axis(evt_time, order, 1)
     evt_kind = np.take_along_axis(evt_kind, order, 1)
-    lean = segs == 1 and ts.size == 0 and full > 0
+    # sample times at the start (0) or at every trajectory's end need no stop on the way
+    at_start = ts == 0.0
+    at_end = np.all(ends[:, -1:] == ts[None, :], axis=0) & ~at_start
+    lean = segs == 1 and full > 0 and bool(np.all(at_start | at_end))
     jobs: list[tuple[int, int]] = chunks
     if lean:
         # the lean loop over the full SIMD batches; the rest (and failures) below
@@ -376,6 +416,11 @@ def run_heyoka(
         bad = ((reached != target) | (steps >= max_steps)
                | ~(np.abs(x_end) <= bound).all(axis=1))  # NaN fails <= bound
     redo = sorted(set((np.flatnonzero(bad) // bs).tolist()))
+    if ts.size:
+        samples[: full * bs, at_start] = xs[: full * bs, None]
+        samples[: full * bs, at_end] = x_end[:, None]
+        for k in redo:  # the general path fills these, NaN past a stop
+            samples[k * bs: (k + 1) * bs] = np.nan
     jobs = [(k * bs, (k + 1) * bs) for k in redo] + chunks[full:]
     if jobs:  # failed batches and the last, partial one: the general path
         run_all(general_work, len(jobs))
