@@ -41,3 +41,21 @@ def test_sweep_on_a_real_scheduler_equals_the_local_sweep():
     host, port = address.removeprefix("tcp://").rsplit(":", 1)
     with pytest.raises(OSError), socket.create_connection((host, int(port)), timeout=2):
         pass
+
+
+def test_a_cluster_object_is_accepted_and_left_running():
+    # a distributed.deploy.Cluster (what dask-jobqueue and dask-kubernetes return), here an
+    # in-process LocalCluster: the sweep uses it and leaves it running; rows as local
+    import distributed
+
+    system = get_model("unicycle")
+    kw = dict(samples=1000, radius=0.05, seed=2, design="random", chunk_size=1000,
+              time_samples=3)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        remote = sweep(system, (1, 2), [0.02, 0.1], dask=cluster, **kw)
+        assert remote.scheduler == cluster.scheduler_address
+        assert cluster.status.name == "running"
+    local = sweep(system, (1, 2), [0.02, 0.1], **kw)
+    np.testing.assert_array_equal(local.final_original, remote.final_original)
+    np.testing.assert_array_equal(local.final_approximation, remote.final_approximation)

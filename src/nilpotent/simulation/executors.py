@@ -6,7 +6,9 @@ start-up excluded).  Locally the tasks run one after another (each is already
 parallel: the batched integrators use every core); with ``dask=`` they go to
 Dask workers: ``"local"`` starts a :class:`distributed.LocalCluster` on this
 machine (one single-threaded worker per core) and closes it afterwards; a
-scheduler address or a :class:`distributed.Client` uses that cluster.  Dask is
+scheduler address, a :class:`distributed.Client` or a cluster object
+(:class:`distributed.deploy.Cluster`: dask-jobqueue's, dask-kubernetes') uses
+that cluster (left running).  Dask is
 the optional extra ``pip install "nilpotent[dask]"``.
 
 :func:`loopback_cluster` starts what a user starts on a cluster, here: a
@@ -73,8 +75,9 @@ def check_dask(dask: Any, chunk_size: int) -> None:
             f"chunk_size {chunk_size} is too small for Dask: one task costs as much as "
             f"30–70 trajectories; use at least {MIN_DASK_CHUNK}"
         )
-    if not isinstance(dask, str | distributed.Client):
-        raise OptionError("dask must be 'local', a scheduler address or a distributed.Client")
+    if not isinstance(dask, str | distributed.Client | distributed.deploy.Cluster):
+        raise OptionError("dask must be 'local', a scheduler address, a distributed.Client "
+                          "or a cluster object (distributed.deploy.Cluster)")
 
 
 def execute(
@@ -130,6 +133,9 @@ def _execute_dask(func: Callable[[Any], Any], tasks: Sequence[Any], sizes: Seque
                 client = distributed.Client(dask)
             except (OSError, TimeoutError, ValueError) as exc:
                 raise OptionError(f"cannot reach the Dask scheduler at {dask!r}: {exc}") from None
+        own_client = True
+    elif isinstance(dask, distributed.deploy.Cluster):  # e.g. dask-jobqueue, KubeCluster
+        client = distributed.Client(dask)
         own_client = True
     else:
         client = dask
