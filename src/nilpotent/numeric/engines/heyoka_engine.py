@@ -301,8 +301,11 @@ def run_heyoka(
     ends = np.cumsum(sig.durations, axis=1)
     tol = heyoka_tolerance(rtol, atol)
     row_used = np.any(pars[..., 1:] != 0, axis=1)  # (B, npar - 1)
-    kinds, which = np.unique(row_used, axis=0, return_inverse=True)
-    which = np.ravel(which)
+    if row_used.shape[0] == 0 or bool(np.all(row_used == row_used[0])):
+        kinds, which = row_used[:1], np.zeros(row_used.shape[0], dtype=np.int64)
+    else:  # np.unique on rows sorts them: ~2 µs a row, only when the rows differ
+        kinds, which = np.unique(row_used, axis=0, return_inverse=True)
+        which = np.ravel(which)
     groups = []
     for g, kind in enumerate(kinds):
         used = (True, *(bool(u) for u in kind))
