@@ -7,6 +7,7 @@ from typing import Annotated
 import typer
 
 from nilpotent.cli.app import (
+    MAX_SCALING_AMPLITUDES,
     AtOpt,
     JsonOpt,
     ModelArg,
@@ -27,6 +28,7 @@ from nilpotent.cli.app import (
     work,
 )
 from nilpotent.cli.bracket_options import BracketOpt, OmegaOpt, PeriodsOpt
+from nilpotent.errors import ComputationLimitError
 
 
 def print_scaling(study) -> None:
@@ -83,6 +85,11 @@ def scaling_command(
         if amplitudes is None
         else parse_float_list(amplitudes, "--amplitudes")
     )
+    if len(amps) > MAX_SCALING_AMPLITUDES:
+        raise ComputationLimitError(
+            f"--amplitudes: {len(amps):,} amplitudes, above the limit {MAX_SCALING_AMPLITUDES:,} "
+            "of a scaling study (one simulation each); use fewer amplitudes, or `nilpotent "
+            "sweep` for large studies")
     check_plot_path(plot)
     system = load_model_option(model, param)
     pair = parse_int_pair(bracket, "--bracket", system.m)

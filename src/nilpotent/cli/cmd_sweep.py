@@ -19,6 +19,7 @@ from nilpotent.cli.app import (
     MAX_SAMPLES,
     MAX_SEED,
     MAX_SWEEP_MOTIONS,
+    MAX_VARY_COMBINATIONS,
     AtOpt,
     JsonOpt,
     ModelArg,
@@ -240,6 +241,12 @@ def sweep_command(
     check_writable(out, "--out")
     check_plot_path(plot)
     varied = parse_vary(vary)
+    combinations = math.prod(len(v) for v in varied.values())
+    if combinations > MAX_VARY_COMBINATIONS:
+        raise ComputationLimitError(
+            f"--vary asks for {combinations:,} parameter combinations, above the limit "
+            f"{MAX_VARY_COMBINATIONS:,} (each needs its own nilpotent approximation); give "
+            "fewer values")
     system = load_model_option(model, param)
     _check_vary_values(model, param, varied)
     pairs = [parse_int_pair(b, "--bracket", system.m) for b in bracket]

@@ -133,6 +133,10 @@ def _execute_dask(func: Callable[[Any], Any], tasks: Sequence[Any], sizes: Seque
                 client = distributed.Client(dask)
             except (OSError, TimeoutError, ValueError) as exc:
                 raise OptionError(f"cannot reach the Dask scheduler at {dask!r}: {exc}") from None
+            except MemoryError:  # something answered, but not a Dask scheduler
+                raise OptionError(
+                    f"the server at {dask!r} did not answer as a Dask scheduler"
+                ) from None
         own_client = True
     elif isinstance(dask, distributed.deploy.Cluster):  # e.g. dask-jobqueue, KubeCluster
         client = distributed.Client(dask)
@@ -270,9 +274,9 @@ def versions(backend: str) -> dict[str, str]:
     """Versions of Python, nilpotent and the numeric packages (plus Dask's on Dask)."""
     from importlib import metadata
 
-    import nilpotent
+    from nilpotent.version import __version__
 
-    out = {"python": sys.version.split()[0], "nilpotent": nilpotent.__version__}
+    out = {"python": sys.version.split()[0], "nilpotent": __version__}
     names = ["numpy", "sympy", "symengine", "numba"]
     if backend == "dask":
         names += ["dask", "distributed"]

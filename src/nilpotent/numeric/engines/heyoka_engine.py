@@ -504,6 +504,8 @@ def _run_chunk(
                 # park the stopped lanes: zero state and inputs, target = their time
                 state[:, dead] = 0.0
                 par[:, dead] = 0.0
+                if not np.isfinite(ta.time).all():  # a lane that blew up: restart its clock
+                    ta.set_time(np.where(np.isfinite(ta.time), ta.time, 0.0))
                 target = np.where(alive, target, ta.time)
                 everyone = False
             if np.all(reached | ~alive):
