@@ -51,6 +51,7 @@ __all__ = [
     "MAX_EXPONENT",
     "MAX_LENGTH",
     "RESERVED_NAMES",
+    "as_expr",
     "format_expression",
     "parse_expression",
     "real_value",
@@ -184,7 +185,7 @@ class _Parser:
         if isinstance(node, ast.UnaryOp):
             operand = self.build(node.operand, depth + 1)
             if isinstance(node.op, ast.USub):
-                return self.checked_call(operator.neg, (operand,), node)
+                return self.checked_call(_negative, (operand,), node)
             if isinstance(node.op, ast.UAdd):
                 return operand
             raise self.fail(f"{_REFUSED_OPERATORS.get(type(node.op), 'this operator')} "
@@ -219,7 +220,10 @@ class _Parser:
         if ident in FUNCTIONS:
             raise self.fail(f"{ident!r} is a function: call it, as in {ident}(x)", node)
         if ident in self.names:
-            return self.names[ident]
+            value = self.names[ident]
+            if not isinstance(value, sp.Expr):
+                raise self.fail(f"the name {ident!r} does not stand for a scalar", node)
+            return value
         raise self.fail(f"unknown name {ident!r}", None, self.allowed_names())
 
     def binary_chain(self, node: ast.BinOp, depth: int) -> sp.Expr:
@@ -258,12 +262,16 @@ class _Parser:
                     "in magnitude)", node)
             if base.is_zero and exponent.is_negative:
                 raise self.fail("division by zero (0 to a negative power)", node)
-            if base.is_Rational:
+            if isinstance(base, sp.Rational):
                 bits = max(int(base.p).bit_length(), int(base.q).bit_length())
                 if bits * abs(float(exponent)) > MAX_BITS:
                     raise self.fail(f"power too large (more than {MAX_BITS} bits)", node)
         result = self.checked_call(sp.Pow, (base, exponent), node)
-        if result.is_Pow and result.exp.is_Number and abs(result.exp) > MAX_EXPONENT:
+        if (
+            isinstance(result, sp.Pow)
+            and isinstance(result.exp, sp.Number)
+            and abs(result.exp) > MAX_EXPONENT
+        ):
             raise self.fail(
                 f"combined exponent {_shorten(str(result.exp))} too large (at most "
                 f"{MAX_EXPONENT} in magnitude)", node)
@@ -309,7 +317,7 @@ class _Parser:
         sympy may move numbers around while evaluating (``exp(710.0 + x)`` becomes
         ``exp(710.0)*exp(x)``), so the whole result is inspected, not only its head.
         """
-        stack = [value]
+        stack: list[sp.Basic] = [value]
         while stack:
             part = stack.pop()
             if part in self.seen:  # subtrees already checked (operands) are skipped
@@ -320,10 +328,10 @@ class _Parser:
                 raise self.fail("undefined or infinite value", node)
             if part is sp.I:
                 raise self.fail("complex value (expressions must be real)", node)
-            if part.is_Float and not math.isfinite(float(part)):
+            if isinstance(part, sp.Float) and not math.isfinite(float(part)):
                 raise self.fail("number too large (outside the range of a double)", node)
-            if part.is_Rational and max(int(part.p).bit_length(),
-                                        int(part.q).bit_length()) > MAX_BITS:
+            if isinstance(part, sp.Rational) and max(int(part.p).bit_length(),
+                                                     int(part.q).bit_length()) > MAX_BITS:
                 raise self.fail(f"exact number too large (more than {MAX_BITS} bits)", node)
         return value
 
@@ -431,10 +439,10 @@ def expanded_terms(expr: sp.Basic) -> int:
             value = sum(count(a) for a in e.args)
         elif e.is_Mul:
             value = math.prod(count(a) for a in e.args)
-        elif e.is_Pow:
+        elif isinstance(e, sp.Pow):
             k = count(e.base)
             x = e.exp
-            if x.is_Integer and k > 1:
+            if isinstance(x, sp.Integer) and k > 1:
                 n = abs(int(x))
                 value = math.comb(k + n - 1, n) if n < 10_000 else cap
             else:
@@ -550,10 +558,37 @@ _FLOAT_FUNCTIONS: dict[type, Callable[..., float]] = {
 }
 
 
+def _negative(value: sp.Expr) -> sp.Expr:
+    return -value
+
+
+def as_expr(value: object) -> sp.Expr:
+    """A number or sympy expression built by the program as a scalar sympy expression.
+
+    Never for user text, which goes through :func:`parse_expression`.
+
+    Parameters
+    ----------
+    value : int, float, fractions.Fraction or sympy expression
+        The value.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is text, or is not a scalar (a matrix, a set, a boolean, ...).
+    """
+    if isinstance(value, str):
+        raise TypeError(f"as_expr does not read text ({value!r}): use parse_expression")
+    expr = sp.sympify(value)
+    if not isinstance(expr, sp.Expr):
+        raise TypeError(f"{value!r} is not a scalar expression")
+    return expr
+
+
 def _float_value(expr: sp.Basic) -> float:
-    if expr.is_Integer or expr.is_Rational:
+    if isinstance(expr, sp.Rational):
         return int(expr.p) / int(expr.q)
-    if expr.is_Float:
+    if isinstance(expr, sp.Float):
         return float(expr)
     if expr is sp.pi:
         return math.pi
@@ -563,7 +598,7 @@ def _float_value(expr: sp.Basic) -> float:
         return math.fsum(_float_value(a) for a in expr.args)
     if expr.is_Mul:
         return math.prod(_float_value(a) for a in expr.args)
-    if expr.is_Pow:
+    if isinstance(expr, sp.Pow):
         return math.pow(_float_value(expr.base), _float_value(expr.exp))
     if isinstance(expr, sp.Function) and expr.func in _FLOAT_FUNCTIONS:
         return _FLOAT_FUNCTIONS[expr.func](*(_float_value(a) for a in expr.args))
