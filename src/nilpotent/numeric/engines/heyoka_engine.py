@@ -361,14 +361,14 @@ def _run_group(
     at_end = np.all(ends[:, -1:] == ts[None, :], axis=0) & ~at_start
     lean = segs == 1 and full > 0 and bool(np.all(at_start | at_end))
     jobs: list[tuple[int, int]] = chunks
-    if lean:
-        # the lean loop over the full SIMD batches; the rest (and failures) below
-        x_t = np.ascontiguousarray(xs[: full * bs].T)
-        par_t = np.ascontiguousarray(pars[: full * bs, 0].T)
-        target = np.ascontiguousarray(ends[: full * bs, 0])
-        final_t = np.empty((n, full * bs))
-        reached = np.empty(full * bs)
-        steps = np.empty(full * bs, dtype=np.int64)
+    # the lean loop's arrays over the full SIMD batches (empty when it does not run)
+    lean_rows = full * bs if lean else 0
+    x_t = np.ascontiguousarray(xs[:lean_rows].T)
+    par_t = np.ascontiguousarray(pars[:lean_rows, 0].T)
+    target = np.ascontiguousarray(ends[:lean_rows, 0])
+    final_t = np.empty((n, lean_rows))
+    reached = np.empty(lean_rows)
+    steps = np.empty(lean_rows, dtype=np.int64)
 
     def lean_work(ta: Any, counter: Iterator[int]) -> None:
         state, par = ta.state, ta.pars
