@@ -55,6 +55,7 @@ from flint import arb, arb_mat, arb_series
 from nilpotent.core.brackets import Word, format_word, se_coordinates, to_symengine
 from nilpotent.core.evaluation import Evaluator, Inaccurate, NotEvaluable, ball, precision
 from nilpotent.core.system import ControlSystem
+from nilpotent.errors import ComputationLimitError
 
 __all__ = ["ORBIT_TIME_BUDGET", "OrbitCertificate", "certify_by_orbit"]
 
@@ -441,6 +442,8 @@ def certify_by_orbit(
                     _, frame = _generic_growth_at(sys, mid)
                 except (Undefined, Inaccurate, NotEvaluable, ZeroDivisionError):
                     continue
+                except ComputationLimitError:
+                    return None  # the frame's fields are too large to build: nothing proved
                 if len(frame) != sys.n:
                     continue
                 try:
@@ -448,6 +451,8 @@ def certify_by_orbit(
                     cols = [at.balls(w, prec) for w in frame]
                 except (Undefined, Inaccurate, NotEvaluable, ZeroDivisionError):
                     continue
+                except ComputationLimitError:
+                    return None
                 n = sys.n
                 mat = arb_mat(n, n, [cols[c][r] for r in range(n) for c in range(n)])
                 det = mat.det()
