@@ -23,6 +23,11 @@ Cases (all at the origin): ``trident-snake`` (body-velocity form),
   ``--timeout`` seconds (default 60); once a car-trailers case times out, larger
   K are not run.
 
+The speed targets of issue 3 (:data:`TARGETS`, CPU seconds, single thread)
+are checked at the end: a missed target is reported and the exit status is 1
+(``make bench`` fails).  They live here, not in the unit tests, which assert
+no timings.
+
 Usage: ``PYTHONPATH=src python benchmarks/approximation.py [--max-k 6]
 [--timeout 60] [--markdown]``.
 """
@@ -39,6 +44,9 @@ from nilpotent.core.approximation import approximate
 from nilpotent.core.filtration import analyze
 from nilpotent.core.system import ControlSystem
 from nilpotent.models import get_model
+
+#: Issue 3's targets: CPU seconds of ``approximate`` (measured ~0.03, 0.1, 0.5 s).
+TARGETS: dict[str, float] = {"trident-snake": 1.0, "car-trailers:5": 10.0, "car-trailers:6": 30.0}
 
 
 def fresh(name: str) -> ControlSystem:
@@ -131,9 +139,11 @@ def main() -> None:
         print("|---|---|---|---|---|---|---|---|")
     skip_baseline = False
     last = ""
+    cpu_of: dict[str, float] = {}
     for name in cases:
         repeat = 3 if not name.startswith("car-trailers") or int(name.split(":")[1]) <= 4 else 1
         wall, cpu, a = time_nilpotent(name, repeat)
+        cpu_of[name] = cpu
         ran = not skip_baseline
         base = run_baseline(name, args.timeout) if ran else None
         if ran and base is None and name.startswith("car-trailers"):
@@ -158,6 +168,16 @@ def main() -> None:
         print("| " + " | ".join(row) + " |" if args.markdown else "  ".join(row), flush=True)
         last = f"approximation: {name} {wall:.2f} s ({ratio} the sympy route)"
     print(last)
+    missed = []
+    for name, limit in TARGETS.items():
+        cpu = cpu_of[name] if name in cpu_of else time_nilpotent(name, 1)[1]
+        ok = cpu < limit
+        verdict = "ok" if ok else "MISSED"
+        print(f"target: approximate({name}) {cpu:.3f} CPU s < {limit:g} s: {verdict}")
+        if not ok:
+            missed.append(name)
+    if missed:
+        raise SystemExit(f"speed targets missed: {', '.join(missed)}")
 
 
 if __name__ == "__main__":

@@ -154,7 +154,7 @@ def main(argv: list[str] | None = None) -> None:
     startup, startup_cpu, engine = out.stdout.split()
     print(f"start-up (imports + cached kernels + 2 trajectories, fresh process): "
           f"{float(startup):.2f} s wall, {float(startup_cpu):.2f} s CPU (engine {engine})")
-    from nilpotent.numeric.heyoka_engine import heyoka_available
+    from nilpotent.numeric.engines.heyoka_engine import heyoka_available
 
     if heyoka_available():
         out = subprocess.run([sys.executable, "-c", STARTUP_HEYOKA], capture_output=True,

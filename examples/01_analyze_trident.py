@@ -5,8 +5,7 @@ Run:  python examples/01_analyze_trident.py
 
 import sympy as sp
 
-from nilpotent.core.filtration import analyze, singular_locus
-from nilpotent.models import get_model
+from nilpotent import analyze, get_model, singular_locus
 
 snake = get_model("trident-snake")  # body-velocity inputs; parameters r = l = 1
 print(snake)

@@ -9,9 +9,7 @@ from pathlib import Path
 
 import sympy as sp
 
-from nilpotent import ControlSystem
-from nilpotent.core.approximation import approximate
-from nilpotent.core.modelfile import load_model_file
+from nilpotent import ControlSystem, approximate, load_model_file
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp())
 

@@ -11,8 +11,7 @@ from pathlib import Path
 
 import sympy as sp
 
-from nilpotent.models import get_model
-from nilpotent.simulate import compare_bracket_motion
+from nilpotent import compare_bracket_motion, get_model
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp())
 

@@ -7,8 +7,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nilpotent.models import get_model
-from nilpotent.simulate import scaling_study
+from nilpotent import get_model, scaling_study
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp())
 

@@ -8,8 +8,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nilpotent.models import get_model
-from nilpotent.planning import plan
+from nilpotent import get_model, plan
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp())
 

@@ -12,8 +12,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nilpotent.models import get_model
-from nilpotent.sweep import amplitude_range, sweep
+from nilpotent import amplitude_range, get_model
+from nilpotent.sweep import sweep
 
 
 def main() -> None:

@@ -29,17 +29,6 @@ from polynomial_systems import (
     witt_dimension,
 )
 
-MODELS = [
-    "unicycle",
-    "heisenberg",
-    "engel",
-    "cartan",
-    "martinet",
-    "trident-snake",
-    "trident-snake-paper",
-    "car-trailers:2",
-]
-
 
 def independent_checks(sys: ControlSystem, a) -> None:
     """Re-derive the approximation's defining properties with plain sympy."""
@@ -66,9 +55,9 @@ def independent_checks(sys: ControlSystem, a) -> None:
 
 
 @pytest.mark.parametrize("method", ["auto", "algebraic", "exponential", "exponential-1"])
-@pytest.mark.parametrize("name", MODELS)
-def test_certificate_and_independent_checks(name, method):
-    sys = get_model(name)
+@pytest.mark.every_model
+def test_certificate_and_independent_checks(model, method):
+    sys = model
     a = approximate(sys, None, method)
     assert a.certificate.ok, a.certificate.failures()
     assert a.certificate.nilpotent_step == a.filtration.step
@@ -273,15 +262,8 @@ def test_methods_registry_and_unknown_method():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    ("name", "limit"), [("trident-snake", 1.0), ("car-trailers:5", 10.0), ("car-trailers:6", 30.0)]
-)
-def test_speed_targets(name, limit):
-    """Issue 3 targets (CPU seconds, single thread; measured ~0.03, 0.1, 0.5 s)."""
-    import time
-
-    sys = get_model(name)
-    start = time.process_time()
-    a = approximate(sys)
-    assert time.process_time() - start < limit
-    assert a.certificate.ok
+@pytest.mark.parametrize("name", ["car-trailers:5", "car-trailers:6"])
+def test_long_trailer_chains_are_certified(name):
+    """Issue 3's largest cases (their speed targets: ``benchmarks/approximation.py``)."""
+    a = approximate(get_model(name))
+    assert a.certificate.ok and a.certificate.nilpotent_step == int(name[-1]) + 2

@@ -278,7 +278,7 @@ def test_stale_temporaries_of_dead_runs_are_removed(tmp_path):
 
 def test_reproduce_never_replaces_a_folder_created_while_it_ran(tmp_path):
     from nilpotent.errors import OptionError
-    from nilpotent.report.pipeline import _move_into_place
+    from nilpotent.report.output import move_into_place
 
     result = tmp_path / ".out.tmp.1.x"
     result.mkdir()
@@ -287,7 +287,7 @@ def test_reproduce_never_replaces_a_folder_created_while_it_ran(tmp_path):
     target.mkdir()  # created by the user during the run (it did not exist at the start)
     (target / "thesis.tex").write_text("precious")
     with pytest.raises(OptionError):
-        _move_into_place(result, target, existed=False)
+        move_into_place(result, target, existed=False)
     assert (target / "thesis.tex").read_text() == "precious"
 
 

@@ -21,9 +21,9 @@ def _sympy_values(system, point):
     )
 
 
-@pytest.mark.parametrize("name", ["trident-snake", "unicycle", "engel", "car-trailers:2"])
-def test_field_values_match_sympy(name):
-    system = get_model(name)
+@pytest.mark.every_model
+def test_field_values_match_sympy(model):
+    system = model
     compiled = compile_system(system, backend="numpy")
     rng = np.random.default_rng(1)
     pts = rng.uniform(-1.5, 1.5, (4, system.n))

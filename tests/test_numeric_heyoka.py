@@ -9,21 +9,21 @@ import sympy as sp
 from nilpotent.errors import MissingExtraError
 from nilpotent.models import get_model
 from nilpotent.numeric import (
-    HarmonicInputs,
+    Signal,
     Status,
     bracket_inputs,
     compile_fields,
     compile_system,
-    heyoka_engine,
     integrate,
 )
+from nilpotent.numeric.engines import heyoka_engine
 
 pytest.importorskip("heyoka")
 
 
-def _constant_input(value: float) -> HarmonicInputs:
+def _constant_input(value: float) -> Signal:
     """One input, one segment of duration 1, ``u = value``."""
-    return HarmonicInputs(np.ones((1, 1)), np.ones((1, 1)), np.full((1, 1, 1), value),
+    return Signal(np.ones((1, 1)), np.ones((1, 1)), np.full((1, 1, 1), value),
                           np.zeros((1, 1, 1, 0)), np.zeros((1, 1, 1, 0)))
 
 
@@ -48,7 +48,7 @@ def test_bracket_motion_matches_solve_ivp(snake):
 def test_segments_and_samples_match_solve_ivp(snake):
     rng = np.random.default_rng(2)
     b, s, k = 5, 3, 2
-    inputs = HarmonicInputs(
+    inputs = Signal(
         rng.uniform(0.5, 1.5, (b, s)), rng.uniform(0.5, 2.0, (b, s)),
         rng.normal(0, 0.3, (b, s, 3)), rng.normal(0, 0.3, (b, s, 3, k)),
         rng.normal(0, 0.3, (b, s, 3, k)),

@@ -12,7 +12,7 @@ import sympy as sp
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.models import get_model
 from nilpotent.numeric import (
-    HarmonicInputs,
+    Signal,
     Status,
     bracket_inputs,
     compile_fields,
@@ -30,7 +30,7 @@ HEIS = compile_fields((X1, X2, X3), [(1, 0, -X2 / 2), (0, 1, X1 / 2)], name="hei
 def _piecewise(values, durations):
     values = np.asarray(values, dtype=float)
     s, m = values.shape
-    return HarmonicInputs(
+    return Signal(
         np.asarray(durations, dtype=float)[None], np.ones((1, s)), values[None],
         np.zeros((1, s, m, 0)), np.zeros((1, s, m, 0)),
     )
@@ -87,7 +87,7 @@ def test_batched_adaptive_matches_tight_solve_ivp_on_the_trident_snake():
     inputs = bracket_inputs(3, 2, 3, amps, omega=1.5)
     times = np.linspace(0, 2 * math.pi / 1.5, 7)
     ours = integrate(compiled, x0, inputs, engine="numba", times=times)
-    ref = integrate(compiled, x0[:8], HarmonicInputs(
+    ref = integrate(compiled, x0[:8], Signal(
         inputs.durations[:8], inputs.omegas[:8], inputs.constant[:8], inputs.cos[:8],
         inputs.sin[:8]), engine="scipy", times=times, rtol=1e-13, atol=1e-15)
     assert ours.all_ok and ref.all_ok
@@ -188,7 +188,7 @@ def test_samples_across_segments_agree_between_engines():
     cos = rng.normal(size=(batch, 3, 2, 2))
     sin = rng.normal(size=(batch, 3, 2, 2))
     cos[:, 0] = sin[:, 0] = 0.0
-    inputs = HarmonicInputs(durations, omegas, constant, cos, sin)
+    inputs = Signal(durations, omegas, constant, cos, sin)
     x0 = rng.normal(size=(batch, 3))
     times = np.array([0.0, 0.3, 0.7, 1.0, 1.8, 2.0, 2.3])
     ref = integrate(HEIS, x0, inputs, engine="scipy", times=times, rtol=1e-13, atol=1e-15)

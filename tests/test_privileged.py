@@ -46,11 +46,9 @@ def check_orders_with_sympy(sys: ControlSystem, coords) -> None:
 
 
 @pytest.mark.parametrize("method", ALL_METHODS)
-@pytest.mark.parametrize(
-    "name", ["unicycle", "heisenberg", "engel", "cartan", "martinet", "car-trailers:2"]
-)
-def test_orders_equal_weights_recomputed(name, method):
-    sys = get_model(name)
+@pytest.mark.every_model(slow=("trident-snake", "trident-snake-joints"))  # 10 s per method
+def test_orders_equal_weights_recomputed(model, method):
+    sys = model
     coords = privileged_coordinates(sys, None, method)
     assert coords.orders == coords.weights
     check_orders_with_sympy(sys, coords)

@@ -16,18 +16,20 @@ from nilpotent.core.approximation import approximate
 from nilpotent.errors import OptionError
 from nilpotent.models import get_model
 from nilpotent.numeric import Status, compile_fields
-from nilpotent.simulate import (
-    Comparison,
+from nilpotent.numeric.signals import (
     FunctionSignal,
+    Signal,
+    bracket_signal,
+    piecewise_constant,
+    sinusoids,
+)
+from nilpotent.simulation import (
+    Comparison,
     ScalingStudy,
     Trajectory,
-    bracket_signal,
     compare_bracket_motion,
-    piecewise_constant,
     scaling_study,
-    signal_from_segments,
     simulate,
-    sinusoids,
 )
 
 
@@ -48,7 +50,7 @@ def test_bracket_signal_formula_and_segment_round_trip():
             sig.evaluate(t), [-0.2 * 2 * math.sin(2 * t), 0.0, 0.2 * 2 * math.cos(2 * t)],
             atol=1e-15,
         )
-    again = signal_from_segments(sig.to_segments())
+    again = Signal.from_segments(sig.to_segments())
     np.testing.assert_array_equal(again.cos, sig.cos)
     np.testing.assert_array_equal(again.sin, sig.sin)
     with pytest.raises(OptionError):

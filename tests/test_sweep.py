@@ -21,9 +21,9 @@ from hypothesis import strategies as st
 from nilpotent.core.approximation import approximate
 from nilpotent.errors import ExpressionError, MissingExtraError, OptionError
 from nilpotent.models import get_model
-from nilpotent.numeric.integrators import Status
-from nilpotent.simulate import bracket_signal, compare_bracket_motion, simulate
-from nilpotent.sweep import amplitude_range, sweep
+from nilpotent.numeric.integrate import Status
+from nilpotent.numeric.signals import bracket_signal
+from nilpotent.simulation import amplitude_range, compare_bracket_motion, simulate, sweep
 
 AMPS = amplitude_range(0.01, 0.08, 4)
 #: scipy: no numba compilation in a fresh cache (the batches here are tiny).

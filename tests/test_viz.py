@@ -69,8 +69,13 @@ def test_motion_figures_have_labelled_axes_and_save(tmp_path) -> None:
     assert paths[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert b"<svg" in paths[1].read_bytes()[:2000]
     assert paths[2].read_bytes()[:4] == b"%PDF"
-    fig2, _ = plot_motion_comparison(q, q + 0.01)
-    assert isinstance(fig2, Figure)
+    other = q + 0.01 * np.sin(np.linspace(0, 3, len(q)))[:, None]
+    _fig2, (_ax, axt2) = plot_motion_comparison(q, other)
+    drawn = [np.asarray(line.get_ydata(), dtype=float) for line in axt2.lines]
+    for traj in (q, other):  # each coordinate's change of both runs is drawn against time
+        for j in range(6):
+            change = traj[:, j] - traj[0, j]
+            assert any(d.shape == change.shape and np.allclose(d, change) for d in drawn), j
 
 
 def test_bad_shapes_are_option_errors(tmp_path) -> None:
@@ -102,9 +107,34 @@ def test_error_plot_reports_slopes() -> None:
     assert any("theory ≥ 2" in s for s in labels)
 
 
-def test_singular_set_panels() -> None:
-    _fig, axes = plot_paper_singular_set(resolution=41)
-    assert len(axes) == 4 and all("rad" in ax.get_xlabel() for ax in axes)
+def _wheels_collinearity(x4: float, x5: float, x6: float) -> float:
+    """Cross product of p2 − p1 and p3 − p1, ``p_i = e^{ic_i}(1 + e^{i x_{3+i}})`` (r = l = 1).
+
+    The wheels' body-frame positions for the paper's offsets ``c = (−2π/3, 0, 2π/3)``;
+    collinear (0) exactly on the singular set (``paper_singular_locus``' derivation).
+    """
+    c = np.array([-2 * np.pi / 3, 0.0, 2 * np.pi / 3])
+    p = np.exp(1j * c) * (1 + np.exp(1j * np.array([x4, x5, x6])))
+    a, b = p[1] - p[0], p[2] - p[0]
+    return float(a.real * b.imag - a.imag * b.real)
+
+
+def test_singular_set_panels_draw_where_the_wheels_are_collinear() -> None:
+    from nilpotent.viz.singular import DEFAULT_SLICES
+
+    _fig, axes = plot_paper_singular_set(resolution=161)
+    assert len(axes) == len(DEFAULT_SLICES)
+    for ax, (x6, _label) in zip(axes, DEFAULT_SLICES, strict=True):
+        assert "rad" in ax.get_xlabel()
+        zero_set = ax.collections[-1]  # the black level-0 contour
+        points = np.concatenate([path.vertices for path in zero_set.get_paths()])
+        assert len(points) > 20  # the singular set crosses every panel
+        worst = max(abs(_wheels_collinearity(a, b, x6)) for a, b in points)
+        assert worst < 2e-3, (x6, worst)
+        # and the origin, marked in every panel, is regular: the wheels form a triangle
+        (marker,) = [line for line in ax.lines if line.get_marker() == "o"]
+        assert tuple(marker.get_xydata()[0]) == (0.0, 0.0)
+        assert abs(_wheels_collinearity(0.0, 0.0, 0.0)) > 1.0
 
 
 def test_html_player_is_self_contained() -> None:

@@ -92,3 +92,9 @@ class UsageError(NilpotentError):
     wrong type (reported by the option parser before a command runs)."""
 
     kind = "usage"
+
+
+class WorldError(NilpotentError):
+    """A world file (workspace bounds and obstacles) is missing or malformed."""
+
+    kind = "world"

@@ -32,6 +32,7 @@ import typer
 from nilpotent.cli import (  # noqa: F401  (each module registers its command)
     cmd_analyze,
     cmd_approximate,
+    cmd_execute,
     cmd_models,
     cmd_plan,
     cmd_reproduce,

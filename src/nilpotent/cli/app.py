@@ -135,6 +135,11 @@ MAX_AMPLITUDE_COUNT = 10_000
 MAX_SWEEP_MOTIONS = 2_000_000
 """Most bracket motions of one sweep (amplitudes x start points x brackets x parameter
 values); each costs a pair of trajectories in memory."""
+MAX_SCALING_AMPLITUDES = 1000
+"""Most amplitudes of a scaling study (``scaling --amplitudes``): one simulation each."""
+MAX_VARY_COMBINATIONS = 100
+"""Most parameter combinations of a sweep (``--vary`` values multiplied): each needs its
+own nilpotent approximation."""
 MAX_CHUNK_SIZE = 1_000_000
 """Largest chunk of a sweep (``--chunk-size``)."""
 MAX_SEED = 2**63 - 1
@@ -340,13 +345,17 @@ def bounded_int(option: str, low: int, high: int, what: str = "") -> Callable[[A
 def parse_int_pair(text: str, option: str, upper: int) -> tuple[int, int]:
     """Parse ``I,J`` (1-based field indices, distinct, at most ``upper``)."""
     parts = [p.strip() for p in text.split(",")]
-    if len(parts) != 2 or not all(p.isdigit() for p in parts):
-        raise OptionError(f"{option} expects two field numbers I,J (e.g. 1,2), got {text!r}")
-    i, j = int(parts[0]), int(parts[1])
+    if len(parts) != 2 or not all(p.isascii() and p.isdigit() for p in parts):
+        raise OptionError(
+            f"{option} expects two field numbers I,J (e.g. 1,2), got {literal(text, 80)!r}")
+    # the number is read without reaching Python's 4300-digit limit (a field number
+    # past the model's count is refused below whatever its size)
+    i, j = (int(p) if len(p.lstrip("0")) <= 9 else upper + 1 for p in parts)
     if not (1 <= i <= upper and 1 <= j <= upper):
-        raise OptionError(f"{option} {text}: field numbers must be between 1 and {upper}")
+        raise OptionError(
+            f"{option} {literal(text, 80)}: field numbers must be between 1 and {upper}")
     if i == j:
-        raise OptionError(f"{option} {text}: the two fields must differ")
+        raise OptionError(f"{option} {literal(text, 80)}: the two fields must differ")
     return i, j
 
 

@@ -11,29 +11,12 @@ def models_command(json_out: JsonOpt = False) -> None:
     """List the built-in models, their parameters (with defaults) and what each one is."""
     from rich.table import Table
 
-    from nilpotent.core.expressions import format_expression
-    from nilpotent.models import list_models
+    from nilpotent.models import list_models, models_to_json
 
-    infos = list_models()
     if json_out:
-        emit_json(
-            {
-                "schema": "nilpotent/models@1",
-                "models": [
-                    {
-                        "name": info.usage,
-                        "example": info.example_spec,
-                        "description": info.description,
-                        "parameters": {
-                            k: format_expression(v) for k, v in info.parameters.items()
-                        },
-                        "parameter_rule": info.parameter_summary(),
-                    }
-                    for info in infos
-                ],
-            }
-        )
+        emit_json(models_to_json())
         return
+    infos = list_models()
     table = Table(title="Built-in models (use a name as MODEL, or a path to a model file)")
     table.add_column("model")
     table.add_column("parameters (default)")

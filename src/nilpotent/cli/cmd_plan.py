@@ -1,4 +1,5 @@
-"""``nilpotent plan``: steer a system from one point to another (iterated nilpotent steering)."""
+"""``nilpotent plan``: steer a system from one point to another, within limits and among
+obstacles (OMPL global path + iterated nilpotent steering, verified by re-simulation)."""
 
 from __future__ import annotations
 
@@ -29,16 +30,20 @@ from nilpotent.cli.app import (
     work,
     write_atomically,
 )
+from nilpotent.cli.plan_options import (
+    ClearanceOpt,
+    FromOpt,
+    LimitOpt,
+    MarginOpt,
+    MaxPieceOpt,
+    SeedOpt,
+    TimeLimitOpt,
+    ToOpt,
+    WorldOpt,
+    plan_from_options,
+)
 from nilpotent.errors import OptionError
 
-FromOpt = Annotated[
-    str | None,
-    typer.Option("--from", metavar="P", help="Start NAME=VALUE,... (default: the origin)."),
-]
-ToOpt = Annotated[
-    str,
-    typer.Option("--to", metavar="Q", help="Goal NAME=VALUE,...; unnamed coordinates are 0."),
-]
 TolOpt = Annotated[
     float,
     typer.Option("--tol", metavar="T",
@@ -46,7 +51,8 @@ TolOpt = Annotated[
 ]
 AnimateOpt = Annotated[
     Path | None,
-    typer.Option("--animate", metavar="FILE", help="Write an animation of the motion (.gif)."),
+    typer.Option("--animate", metavar="FILE",
+                 help="Write an animation of the motion (.gif, .mp4 or .html)."),
 ]
 AnchorOpt = Annotated[
     str,
@@ -61,17 +67,30 @@ MaxItOpt = Annotated[
 ]
 
 
+ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
+
+
 def _check_outputs(plot: Path | None, animate: Path | None) -> None:
     check_plot_path(plot)
-    if animate is not None and animate.suffix.lower() != ".gif":
+    if animate is not None and animate.suffix.lower() not in ANIMATION_SUFFIXES:
         raise OptionError(
-            f"--animate {literal(animate)}: the animation is written as GIF (use .gif)")
+            f"--animate {literal(animate)}: unknown animation type "
+            f"(use {', '.join(ANIMATION_SUFFIXES)})"
+        )
+    if animate is not None and animate.suffix.lower() == ".mp4":
+        from matplotlib import animation
+
+        if not animation.writers.is_available("ffmpeg"):
+            raise OptionError(
+                f"--animate {literal(animate)}: writing .mp4 needs ffmpeg (use .gif or .html)"
+            )
     check_writable(animate, "--animate")
 
 
-def _print_plan(result) -> None:
+def _print_plan(glob) -> None:
     from rich.table import Table
 
+    result = glob.plan
     console = stdout_console()
     sys = result.system
     print_heading(
@@ -95,8 +114,19 @@ def _print_plan(result) -> None:
         pts.add_row(name, f"{result.start[k]: .10g}", f"{result.goal[k]: .10g}",
                     f"{result.reached[k]: .10g}")
     console.print(pts)
-    verdict = "reached" if result.converged else "NOT reached"
-    console.print(f"goal {verdict}: error {result.error:.3e} (tol {result.tol:g})")
+    v = glob.verification
+    console.print(
+        f"route {glob.route}: {len(glob.waypoints)} waypoint(s), {len(glob.pieces)} piece(s)"
+        + (f", world {literal(glob.world.name)}" if glob.world is not None else "")
+    )
+    lim = ", ".join(f"{k} in [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in glob.limits.as_dict().items())
+    console.print(f"limits: {lim or 'none'}; limits kept: {v.limits_ok}")
+    if v.clearance is not None:
+        console.print(f"clearance to obstacles: {v.clearance:.4g}")
+    if v.min_singular_margin is not None:
+        console.print(f"smallest singular margin: {v.min_singular_margin:.4g}")
+    verdict = "reached" if v.error <= result.tol else "NOT reached"
+    console.print(f"goal {verdict}: error {v.error:.3e} (tol {result.tol:g}; re-simulated)")
 
 
 @app.command("plan")
@@ -107,18 +137,28 @@ def plan_command(
     from_: FromOpt = None,
     tol: TolOpt = 1e-8,
     param: ParamOpt = None,
+    world: WorldOpt = None,
+    limit: LimitOpt = None,
+    singular_margin: MarginOpt = 0.0,
+    clearance: ClearanceOpt = 0.0,
+    time_limit: TimeLimitOpt = 60.0,
+    seed: SeedOpt = 0,
+    max_piece: MaxPieceOpt = 1.0,
     anchor: AnchorOpt = "auto",
     max_iterations: MaxItOpt = 30,
     plot: PlotOpt = None,
     animate: AnimateOpt = None,
     json_out: JsonOpt = False,
 ) -> None:
-    """Steer MODEL from --from to --to by iterated exact steering of nilpotent approximations.
+    """Steer MODEL from --from to --to within its limits and around the --world's obstacles.
 
-    Prints the error after each iteration; --json gives the controls as segments
-    (schema nilpotent/plan@1): u_i(t) = constant + Σ_k cos[k-1]·cos(kωt) + sin[k-1]·sin(kωt).
+    Small problems are solved by iterated exact steering of nilpotent
+    approximations; otherwise a collision-free path from OMPL (RRTConnect) is
+    steered piece by piece, halving pieces whose motion leaves the free space.
+    Every plan is re-simulated densely and checked (clearance, limits, error).
+    --json gives the controls as segments (schema nilpotent/plan@1):
+    u_i(t) = constant + Σ_k cos[k-1]·cos(kωt) + sin[k-1]·sin(kωt).
     """
-    from nilpotent.planning import plan
     from nilpotent.planning.iterative import ANCHORS
 
     if not (math.isfinite(tol) and tol > 0):
@@ -128,25 +168,38 @@ def plan_command(
             f"--anchor must be auto, {', '.join(ANCHORS)}; got {literal(anchor, 60)!r}")
     if max_iterations < 1:
         raise OptionError(f"--max-iterations must be >= 1, got {max_iterations}")
+    if not (math.isfinite(time_limit) and time_limit > 0):
+        raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
+    if not (math.isfinite(max_piece) and max_piece > 0):
+        raise OptionError(f"--max-piece must be a positive number, got {max_piece}")
     _check_outputs(plot, animate)
     system = load_model_option(model, param)
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
     with work(f"plan {system.name}"):
-        result = plan(system, start, goal, tol, anchor=anchor, max_iterations=max_iterations)
-    if plot is not None:
-        from nilpotent.planning.plotting import plot_plan
-
-        save_figure(plot_plan(result), plot, (system.name,))
-    if animate is not None:
-        import matplotlib
-
-        from nilpotent.planning.plotting import animate_plan
-
-        # the plan's figures use no mathtext: a model name such as $\frac{a}$ stays literal
-        with write_atomically(animate) as tmp, matplotlib.rc_context({"text.parse_math": False}):
-            animate_plan(result, tmp)
+        result = plan_from_options(
+            system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
+            max_piece, anchor=anchor, max_iterations=max_iterations,
+            clearance=clearance,
+        )
+    write_pictures(result, plot, animate)
     if json_out:
         emit_json(result.to_json())
         return
     _print_plan(result)
+
+
+def write_pictures(result, plot: Path | None, animate: Path | None) -> None:
+    """``--plot`` and ``--animate`` of a global plan (world, outline, joint limits)."""
+    if plot is not None:
+        from nilpotent.viz.plan_world import plot_plan_world
+
+        save_figure(plot_plan_world(result), plot, (result.plan.system.name,))
+    if animate is not None:
+        import matplotlib
+
+        from nilpotent.viz.plan_world import animate_plan_world
+
+        # no mathtext: a model name such as $\frac{a}$ stays literal
+        with write_atomically(animate) as tmp, matplotlib.rc_context({"text.parse_math": False}):
+            animate_plan_world(result, tmp, animate.suffix.lower())

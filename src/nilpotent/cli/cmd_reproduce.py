@@ -15,7 +15,6 @@ from nilpotent.cli.app import (
     emit_json,
     literal,
     stdout_console,
-    work,
 )
 
 
@@ -42,15 +41,9 @@ def reproduce_command(
     from nilpotent.report.pipeline import reproduce
 
     check_writable(out, "--out", folder=True)
-    with work("reproduce") as bar:
-
-        def progress(step: str, done: int, total: int) -> None:
-            bar.total = total
-            bar.update(done, detail=step)
-
-        result = reproduce(out, quick=quick, progress=progress)
+    result = reproduce(out, quick=quick)  # reports its steps through nilpotent.progress
     if json_out:
-        emit_json(result.summary())
+        emit_json(result.to_json())
         return
     audit = result.audit
     con = stdout_console()

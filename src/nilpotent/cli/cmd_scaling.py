@@ -7,6 +7,7 @@ from typing import Annotated
 import typer
 
 from nilpotent.cli.app import (
+    MAX_SCALING_AMPLITUDES,
     AtOpt,
     JsonOpt,
     ModelArg,
@@ -26,14 +27,8 @@ from nilpotent.cli.app import (
     stdout_console,
     work,
 )
-from nilpotent.cli.cmd_simulate import (
-    BracketOpt,
-    OmegaOpt,
-    PeriodsOpt,
-    check_periods,
-    check_positive,
-)
-from nilpotent.errors import OptionError
+from nilpotent.cli.bracket_options import BracketOpt, OmegaOpt, PeriodsOpt
+from nilpotent.errors import ComputationLimitError
 
 
 def print_scaling(study) -> None:
@@ -83,19 +78,18 @@ def scaling_command(
     json_out: JsonOpt = False,
 ) -> None:
     """Fit the log–log slope of the approximation error per weight group (expected w + 1)."""
-    from nilpotent.simulate import DEFAULT_AMPLITUDES, scaling_study
+    from nilpotent.simulation import DEFAULT_AMPLITUDES, scaling_study
 
     amps = (
         list(DEFAULT_AMPLITUDES)
         if amplitudes is None
         else parse_float_list(amplitudes, "--amplitudes")
     )
-    for a in amps:
-        check_positive(a, "--amplitudes")
-    if len(set(amps)) < 2:
-        raise OptionError("--amplitudes: give at least two different amplitudes")
-    check_positive(omega, "--omega")
-    check_periods(periods)
+    if len(amps) > MAX_SCALING_AMPLITUDES:
+        raise ComputationLimitError(
+            f"--amplitudes: {len(amps):,} amplitudes, above the limit {MAX_SCALING_AMPLITUDES:,} "
+            "of a scaling study (one simulation each); use fewer amplitudes, or `nilpotent "
+            "sweep` for large studies")
     check_plot_path(plot)
     system = load_model_option(model, param)
     pair = parse_int_pair(bracket, "--bracket", system.m)

@@ -2,20 +2,17 @@
 
 from __future__ import annotations
 
-import math
 from typing import Annotated
 
 import typer
 
 from nilpotent.cli.app import (
-    MAX_PERIODS,
     AtOpt,
     JsonOpt,
     ModelArg,
     ParamOpt,
     PlotOpt,
     app,
-    bounded_int,
     check_plot_path,
     cli_errors,
     emit_json,
@@ -28,38 +25,7 @@ from nilpotent.cli.app import (
     stdout_console,
     work,
 )
-from nilpotent.errors import ComputationLimitError, OptionError
-
-BracketOpt = Annotated[
-    str,
-    typer.Option(
-        "--bracket",
-        metavar="I,J",
-        help="The two fields whose bracket the loop realises (1-based, different).",
-    ),
-]
-OmegaOpt = Annotated[
-    float, typer.Option("--omega", metavar="W", help="Angular frequency ω of the loop (> 0).")
-]
-PeriodsOpt = Annotated[
-    int,
-    typer.Option("--periods", metavar="K",
-                 help=f"Number of whole periods (1 to {MAX_PERIODS}).",
-                 parser=bounded_int("--periods", 1, MAX_PERIODS)),
-]
-
-def check_positive(value: float, option: str) -> float:
-    if not (math.isfinite(value) and value > 0):
-        raise OptionError(f"{option} must be a positive number, got {value}")
-    return float(value)
-
-
-def check_periods(value: int) -> int:
-    if value < 1:
-        raise OptionError(f"--periods must be >= 1, got {value}")
-    if value > MAX_PERIODS:
-        raise ComputationLimitError(f"--periods {value:,} is above the limit {MAX_PERIODS:,}")
-    return int(value)
+from nilpotent.cli.bracket_options import BracketOpt, OmegaOpt, PeriodsOpt
 
 
 def print_comparison(comp) -> None:
@@ -108,11 +74,8 @@ def simulate_command(
     json_out: JsonOpt = False,
 ) -> None:
     """Simulate u_I = -Aω sin ωt, u_J = Aω cos ωt on the system and its nilpotent approximation."""
-    from nilpotent.simulate import compare_bracket_motion
+    from nilpotent.simulation import compare_bracket_motion
 
-    check_positive(amplitude, "--amplitude")
-    check_positive(omega, "--omega")
-    check_periods(periods)
     check_plot_path(plot)
     system = load_model_option(model, param)
     pair = parse_int_pair(bracket, "--bracket", system.m)

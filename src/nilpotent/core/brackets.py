@@ -50,6 +50,11 @@ def word_length(w: Word) -> int:
 def format_word(w: Word) -> str:
     """The word as users write it.
 
+    Parameters
+    ----------
+    w : Word
+        A generator ``i`` (1-based) or a pair of words.
+
     Examples
     --------
     >>> format_word((1, (1, 2)))
@@ -149,6 +154,13 @@ def hall_basis(m: int, max_length: int) -> tuple[Word, ...]:
     length $k$ (Witt's formula).  Example for ``m = 2`` up to length 3:
     ``X1, X2, [X1,X2], [X1,[X1,X2]], [X2,[X1,X2]]``.
 
+    Parameters
+    ----------
+    m : int
+        Number of generators (fields).
+    max_length : int
+        Longest word returned.
+
     Examples
     --------
     >>> [format_word(w) for w in hall_basis(2, 4)][3:]
@@ -202,6 +214,13 @@ def bracket(
     """The Lie bracket $[X, Y] = DY\\cdot X - DX\\cdot Y$ of two sympy fields (expanded).
 
     Component $j$ is $X(Y_j) - Y(X_j)$, so $[X,Y]f = X(Yf) - Y(Xf)$.
+
+    Parameters
+    ----------
+    X, Y : sequence of sympy expressions
+        The two fields' components, shape ``(n,)``, in the order of ``coords``.
+    coords : sequence of sympy symbols
+        The coordinates, shape ``(n,)``.
 
     Examples
     --------
@@ -353,6 +372,13 @@ def word_field(sys: ControlSystem, word: Word) -> tuple[sp.Expr, ...]:
     Computed with symengine (each bracket expanded), converted to sympy and
     cached on ``sys``.  Parameters are substituted.  Convention
     $[X,Y] = DY\\cdot X - DX\\cdot Y$.
+
+    Parameters
+    ----------
+    sys : ControlSystem
+        The system whose fields ``X1..Xm`` the word names.
+    word : Word
+        A generator ``i`` (1-based) or a pair of words.
 
     Examples
     --------

@@ -572,6 +572,11 @@ def format_expression(expr: sp.Basic | int | float) -> str:
     ``"-pi/3"``), floats are printed as the shortest decimal that reads back
     as the same double (``"0.1"``, ``"1e-05"``).
 
+    Parameters
+    ----------
+    expr : sympy expression, int or float
+        The expression to print.
+
     Raises
     ------
     ExpressionError

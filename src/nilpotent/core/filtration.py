@@ -651,6 +651,13 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
     regular everywhere).  ``filtration`` (default ``analyze(sys)``) only
     supplies the generic growth vector.
 
+    Parameters
+    ----------
+    sys : ControlSystem
+        The system (parameters are substituted).
+    filtration : Filtration or None
+        Whose frame words to use (default: ``analyze(sys)`` at the origin).
+
     Raises
     ------
     ComputationLimitError

@@ -51,6 +51,7 @@ from nilpotent.core.expressions import (
     parse_expression,
     real_value,
 )
+from nilpotent.core.outline import Limits, Outline
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, ExpressionError, ModelError
 from nilpotent.strict_json import json_text
@@ -59,13 +60,17 @@ __all__ = [
     "ALLOWED_KEYS",
     "SUFFIXES",
     "dump_model_file",
+    "limits_from_dict",
     "load_model_file",
+    "outline_from_dict",
     "system_from_dict",
     "system_to_dict",
 ]
 
 #: Top-level keys of a model file.
-ALLOWED_KEYS: tuple[str, ...] = ("name", "description", "coordinates", "parameters", "fields")
+ALLOWED_KEYS: tuple[str, ...] = (
+    "name", "description", "coordinates", "parameters", "fields", "limits", "geometry",
+)
 #: File suffixes understood by :func:`load_model_file` and :func:`dump_model_file`.
 SUFFIXES: tuple[str, ...] = (".toml", ".json")
 
@@ -325,10 +330,112 @@ def system_from_dict(
                 f"e.g. {coord_names[0]} = \"1\")"
             )
         fields.append(tuple(components[c] for c in coord_names))
+    limits = limits_from_dict(data.get("limits", {}), coord_names, source)
+    geometry = outline_from_dict(data["geometry"], names, source) if "geometry" in data else None
     try:
-        return ControlSystem(name, coords, tuple(fields), tuple(params.items()), description)
+        return ControlSystem(
+            name, coords, tuple(fields), tuple(params.items()), description, limits, geometry
+        )
     except ModelError as exc:
         raise ModelError(f"{source}: {exc}") from None
+
+
+def limits_from_dict(raw: object, coord_names: list[str], source: str) -> Limits:
+    """The ``[limits]`` table: ``NAME = [lo, hi]`` (numbers or constant expressions).
+
+    Raises
+    ------
+    ModelError
+        Not a table, an unknown coordinate, not a pair, ``lo > hi``, not finite.
+    """
+    if not isinstance(raw, Mapping):
+        raise ModelError(f"{source}: limits must be a table of NAME = [lo, hi], got {_show(raw)}")
+    bounds = []
+    for key, pair in raw.items():
+        where = f"{source}: limits.{key}"
+        if key not in coord_names:
+            raise ModelError(
+                f"{where}: {key!r} is not a coordinate (coordinates: {', '.join(coord_names)})"
+            )
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise ModelError(f"{where}: a limit is a pair [lo, hi], got {_show(pair)}")
+        lo, hi = (real_value(_parameter_value(v, where), where=where) for v in pair)
+        if lo > hi:
+            raise ModelError(f"{where}: lower bound {lo} is above the upper bound {hi}")
+        bounds.append((key, lo, hi))
+    return Limits(tuple(bounds))
+
+
+def _outline_point(raw: object, names: Mapping[str, sp.Symbol], where: str) -> tuple:
+    if not isinstance(raw, list) or len(raw) != 2:
+        raise ModelError(f"{where}: a point is a pair [X, Y] of expressions, got {_show(raw)}")
+    return (_component(raw[0], names, f"{where}[0]"), _component(raw[1], names, f"{where}[1]"))
+
+
+def outline_from_dict(raw: object, names: Mapping[str, sp.Symbol], source: str) -> Outline:
+    """The ``[geometry]`` table: ``polygons``, ``segments``, ``discs`` (INTERFACE.md).
+
+    Every number is an expression of the coordinates and parameters (the safe
+    grammar of :mod:`nilpotent.core.expressions`).
+
+    Raises
+    ------
+    ModelError
+        Unknown keys, malformed entries, a polygon with fewer than 3 points.
+    ExpressionError
+        An expression outside the grammar or naming an unknown symbol.
+    """
+    kinds = ("polygons", "segments", "discs")
+    if not isinstance(raw, Mapping):
+        raise ModelError(f"{source}: geometry must be a table with {', '.join(kinds)}")
+    for key in raw:
+        if key not in kinds:
+            raise ModelError(
+                f"{source}: geometry: unknown key {_show(key)} (allowed: {', '.join(kinds)})"
+            )
+    parts: dict[str, list] = {k: [] for k in kinds}
+    for kind in kinds:
+        items = raw.get(kind, [])
+        if not isinstance(items, list):
+            raise ModelError(f"{source}: geometry.{kind} must be a list of tables")
+        for i, item in enumerate(items):
+            where = f"{source}: geometry.{kind}[{i}]"
+            want = {"polygons": ("points",), "segments": ("from", "to"),
+                    "discs": ("center", "radius")}[kind]
+            if not isinstance(item, Mapping) or set(item) != set(want):
+                raise ModelError(f"{where}: needs exactly the keys {', '.join(want)}")
+            if kind == "polygons":
+                pts = item["points"]
+                if not isinstance(pts, list) or len(pts) < 3:
+                    raise ModelError(f"{where}.points: a polygon needs at least 3 points")
+                parts[kind].append(tuple(
+                    _outline_point(p, names, f"{where}.points[{j}]") for j, p in enumerate(pts)
+                ))
+            elif kind == "segments":
+                parts[kind].append((_outline_point(item["from"], names, f"{where}.from"),
+                                    _outline_point(item["to"], names, f"{where}.to")))
+            else:
+                parts[kind].append((_outline_point(item["center"], names, f"{where}.center"),
+                                    _component(item["radius"], names, f"{where}.radius")))
+    try:
+        return Outline(tuple(parts["polygons"]), tuple(parts["segments"]), tuple(parts["discs"]))
+    except ModelError as exc:
+        raise ModelError(f"{source}: {exc}") from None
+
+
+def _outline_to_dict(outline: Outline) -> dict[str, Any]:
+    def pt(p: tuple) -> list[str]:
+        return [format_expression(p[0]), format_expression(p[1])]
+
+    out: dict[str, Any] = {}
+    if outline.polygons:
+        out["polygons"] = [{"points": [pt(p) for p in poly]} for poly in outline.polygons]
+    if outline.segments:
+        out["segments"] = [{"from": pt(a), "to": pt(b)} for a, b in outline.segments]
+    if outline.discs:
+        out["discs"] = [{"center": pt(c), "radius": format_expression(r)}
+                        for c, r in outline.discs]
+    return out
 
 
 def system_to_dict(sys: ControlSystem) -> dict[str, Any]:
@@ -365,6 +472,10 @@ def system_to_dict(sys: ControlSystem) -> dict[str, Any]:
         }
         for f in sys.fields
     ]
+    if sys.limits:
+        out["limits"] = {k: [lo, hi] for k, (lo, hi) in sys.limits.as_dict().items()}
+    if sys.geometry is not None:
+        out["geometry"] = _outline_to_dict(sys.geometry)
     return out
 
 
@@ -382,6 +493,11 @@ def load_model_file(path: str | Path) -> ControlSystem:
     """Read a model file (``.toml`` or ``.json``) into a :class:`ControlSystem`.
 
     The model's name defaults to the file's stem.
+
+    Parameters
+    ----------
+    path : str or Path
+        The model file (format: ``INTERFACE.md``).
 
     Raises
     ------
@@ -533,6 +649,13 @@ def _to_toml(data: Mapping[str, Any]) -> str:
     for f in data["fields"]:
         lines += ["", "[[fields]]"]
         lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in f.items()]
+    if data.get("limits"):
+        lines += ["", "[limits]"]
+        lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in data["limits"].items()]
+    for kind, items in data.get("geometry", {}).items():
+        for item in items:
+            lines += ["", f"[[geometry.{kind}]]"]
+            lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in item.items()]
     return "\n".join(lines) + "\n"
 
 

@@ -21,6 +21,7 @@ from functools import cached_property
 
 import sympy as sp
 
+from nilpotent.core.outline import Limits, Outline
 from nilpotent.errors import ModelError
 
 Expr = sp.Expr
@@ -43,6 +44,15 @@ class ControlSystem:
         ``sympy.Symbol(name)`` for each parameter.
     description:
         One line saying what the model is.
+    limits:
+        Box limits on coordinates (:class:`~nilpotent.core.outline.Limits`;
+        the ``[limits]`` table of model files).
+    geometry:
+        The robot's outline for collision checks
+        (:class:`~nilpotent.core.outline.Outline`), or ``None``.
+
+    ``limits`` and ``geometry`` do not change the dynamics: they take no part
+    in equality and hashing (systems compare by their fields).
 
     Examples
     --------
@@ -58,6 +68,8 @@ class ControlSystem:
     fields: tuple[tuple[Expr, ...], ...]
     parameters: tuple[tuple[str, Expr], ...] = ()
     description: str = ""
+    limits: Limits = field(default_factory=Limits, compare=False, hash=False)
+    geometry: Outline | None = field(default=None, compare=False, hash=False)
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False, hash=False)
 
     def __post_init__(self) -> None:
@@ -85,6 +97,15 @@ class ControlSystem:
                 f"model {self.name!r}: names used both as coordinate and parameter: "
                 f"{', '.join(sorted(clash))}"
             )
+        if not isinstance(self.limits, Limits):
+            raise ModelError(f"model {self.name!r}: limits must be a Limits value")
+        self.limits.check_names(names, f"model {self.name!r}")
+        if self.geometry is not None:
+            unknown = self.geometry.free_names() - set(names) - set(dict(params))
+            if unknown:
+                raise ModelError(
+                    f"model {self.name!r}: geometry uses unknown names {', '.join(sorted(unknown))}"
+                )
         object.__setattr__(self, "coordinates", coords)
         object.__setattr__(self, "fields", flds)
         object.__setattr__(self, "parameters", params)
@@ -123,7 +144,8 @@ class ControlSystem:
                 )
             current[k] = sp.S(v)  # values are numbers, never user text
         return ControlSystem(
-            self.name, self.coordinates, self.fields, tuple(current.items()), self.description
+            self.name, self.coordinates, self.fields, tuple(current.items()), self.description,
+            self.limits, self.geometry,
         )
 
     @cached_property
@@ -143,9 +165,14 @@ class ControlSystem:
         )
 
     def specialized(self) -> ControlSystem:
-        """The same system with the parameters substituted (and then dropped)."""
+        """The same system with the parameters substituted (and then dropped).
+
+        The limits are kept; the geometry is dropped (its expressions may use
+        the parameters).
+        """
         return ControlSystem(
-            self.name, self.coordinates, self.specialized_fields, (), self.description
+            self.name, self.coordinates, self.specialized_fields, (), self.description,
+            self.limits,
         )
 
     def field_matrix(self) -> sp.ImmutableMatrix:

@@ -24,14 +24,17 @@ from __future__ import annotations
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from types import MappingProxyType
 
 import sympy as sp
 
+from nilpotent.core.expressions import format_expression
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
+from nilpotent.models.outlines import with_builtin_constraints
 from nilpotent.models.trailers import car_trailers
 from nilpotent.models.trident import (
     TridentGeometry,
@@ -47,6 +50,7 @@ from nilpotent.models.trident import (
 __all__ = [
     "MAX_TRAILERS",
     "MODELS",
+    "MODELS_SCHEMA",
     "ModelInfo",
     "TridentGeometry",
     "WheelSlip",
@@ -54,6 +58,7 @@ __all__ = [
     "joint_singularity",
     "list_models",
     "load_system",
+    "models_to_json",
     "paper_singularity",
     "wheel_slip",
 ]
@@ -68,44 +73,60 @@ _MODEL_FILE_SUFFIXES = (".toml", ".json")
 class ModelInfo:
     """One entry of the model registry.
 
+    The entry is data: nothing is built when the registry is created.  The
+    one-line :attr:`description` and the default :attr:`parameters` are read
+    from the model itself, built once on first access (so ``import
+    nilpotent.models`` builds no system).
+
     Parameters
     ----------
-    name:
+    name : str
         Registry name (``"trident-snake"``, ``"car-trailers"``).
-    description:
-        One line for ``nilpotent models``.
-    parameters:
-        Parameter name → default value (exact sympy numbers).  For a family
-        with an argument (``car-trailers:K``) these are the defaults of the
-        model built with :attr:`default_argument`; :attr:`parameter_note`
-        states the general rule.
-    build:
+    build : Callable[..., ControlSystem]
         ``build()`` (or ``build(K)`` when :attr:`argument` is set) returns the
         :class:`~nilpotent.core.system.ControlSystem` with its default
         parameter values.
-    argument:
+    argument : str or None
         Name of the integer argument written after a colon (``"K"`` for
         ``car-trailers:K``), or ``None``.
-    default_argument:
-        The argument used by :attr:`example_spec`.
-    parameter_note:
+    default_argument : int or None
+        The argument used by :attr:`example_spec` and for the description.
+    parameter_note : str
         Human-readable parameter rule for families (``"d1..dK = 1"``).
-    positive_parameters:
+    positive_parameters : bool
         Every parameter must be a positive number (lengths); :func:`get_model`
         refuses other values with :class:`ModelError`.
+    summary : str
+        A family's one-line description (``""``: the built model's own).
     """
 
     name: str
-    description: str
-    parameters: Mapping[str, sp.Expr]
     build: Callable[..., ControlSystem] = field(repr=False)
     argument: str | None = None
     default_argument: int | None = None
     parameter_note: str = ""
     positive_parameters: bool = False
+    summary: str = ""
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "parameters", MappingProxyType(dict(self.parameters)))
+    @cached_property
+    def example(self) -> ControlSystem:
+        """The model built with its defaults (:attr:`example_spec`); built once, on first use."""
+        return self.build(self.default_argument) if self.argument else self.build()
+
+    @property
+    def description(self) -> str:
+        """One line for ``nilpotent models``: :attr:`summary`, else the model's own."""
+        return self.summary or self.example.description
+
+    @property
+    def parameters(self) -> Mapping[str, sp.Expr]:
+        """Parameter name → default value (exact sympy numbers) of :attr:`example`.
+
+        For a family with an argument these are the defaults of the model
+        built with :attr:`default_argument`; :attr:`parameter_note` states the
+        general rule.
+        """
+        return MappingProxyType(dict(self.example.parameters))
 
     @property
     def usage(self) -> str:
@@ -123,28 +144,15 @@ class ModelInfo:
             return self.parameter_note
         return ", ".join(f"{k}={v}" for k, v in self.parameters.items())
 
-
-def _entry(
-    name: str,
-    build: Callable[..., ControlSystem],
-    *,
-    argument: str | None = None,
-    default_argument: int | None = None,
-    parameter_note: str = "",
-    description: str = "",
-    positive_parameters: bool = False,
-) -> ModelInfo:
-    system = build(default_argument) if argument else build()
-    return ModelInfo(
-        name=name,
-        description=description or system.description,
-        parameters=dict(system.parameters),
-        build=build,
-        argument=argument,
-        default_argument=default_argument,
-        parameter_note=parameter_note,
-        positive_parameters=positive_parameters,
-    )
+    def to_json(self) -> dict[str, object]:
+        """This entry as one element of the ``nilpotent/models@1`` list (``INTERFACE.md``)."""
+        return {
+            "name": self.usage,
+            "example": self.example_spec,
+            "description": self.description,
+            "parameters": {k: format_expression(v) for k, v in self.parameters.items()},
+            "parameter_rule": self.parameter_summary(),
+        }
 
 
 #: The built-in models, by registry name (``nilpotent models`` lists them in this order).
@@ -152,27 +160,35 @@ MODELS: Mapping[str, ModelInfo] = MappingProxyType(
     {
         info.name: info
         for info in (
-            _entry("trident-snake", trident_snake, positive_parameters=True),
-            _entry("trident-snake-paper", trident_snake_paper),
-            _entry("trident-snake-joints", trident_snake_joints, positive_parameters=True),
-            _entry("unicycle", unicycle),
-            _entry(
+            ModelInfo("trident-snake", trident_snake, positive_parameters=True),
+            ModelInfo("trident-snake-paper", trident_snake_paper),
+            ModelInfo("trident-snake-joints", trident_snake_joints, positive_parameters=True),
+            ModelInfo("unicycle", unicycle),
+            ModelInfo(
                 "car-trailers",
                 car_trailers,
                 argument="K",
                 default_argument=1,
                 parameter_note="d1..dK=1 (hitch lengths, one per trailer)",
-                description="unicycle car pulling K trailers hitched at the axle centres; "
+                summary="unicycle car pulling K trailers hitched at the axle centres; "
                 "growth (2,3,...,K+3) at the origin",
                 positive_parameters=True,
             ),
-            _entry("heisenberg", heisenberg),
-            _entry("engel", engel),
-            _entry("cartan", cartan),
-            _entry("martinet", martinet),
+            ModelInfo("heisenberg", heisenberg),
+            ModelInfo("engel", engel),
+            ModelInfo("cartan", cartan),
+            ModelInfo("martinet", martinet),
         )
     }
 )
+
+#: The schema name of :func:`models_to_json`.
+MODELS_SCHEMA = "nilpotent/models@1"
+
+
+def models_to_json() -> dict[str, object]:
+    """The ``nilpotent/models@1`` object: every registry entry's :meth:`ModelInfo.to_json`."""
+    return {"schema": MODELS_SCHEMA, "models": [info.to_json() for info in MODELS.values()]}
 
 
 def list_models() -> tuple[ModelInfo, ...]:
@@ -235,6 +251,7 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                 f"model {spec!r} needs its argument: {info.usage} (e.g. {info.example_spec})"
             )
         system = info.build(_parse_argument(spec, info, arg))
+    system = with_builtin_constraints(system)  # outline and default limits (planning)
     if params:
         system = system.with_parameters(dict(params))
     if info.positive_parameters:
@@ -244,6 +261,34 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                     f"model {spec!r}: parameter {key} must be a positive number, got {value}"
                 )
     return system
+
+
+def _shown(text: str, limit: int = 200) -> str:
+    clean = "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
+    if len(clean) <= limit:
+        return clean
+    return clean[:limit] + f"... ({len(clean) - limit} more characters)"
+
+
+def _file_problem(path: Path) -> str | None:
+    """Why ``path`` cannot be opened as a file, in words (None: it can be looked at)."""
+    import errno
+    import os
+
+    try:
+        os.stat(path)
+    except FileNotFoundError:
+        if os.path.islink(path):
+            return f"is a broken symbolic link (its target {_shown(os.readlink(path))!r} " \
+                   "does not exist)"
+        return "not found"
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a symbolic link loop (it never reaches a file)"
+        if exc.errno == errno.ENAMETOOLONG:
+            return "has a name too long for the file system"
+        return f"cannot be read ({exc.strerror or type(exc).__name__})"
+    return None
 
 
 def load_system(spec: str, params: Mapping[str, object] | None = None) -> ControlSystem:
@@ -266,14 +311,17 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
     """
     if spec.partition(":")[0].strip() in MODELS:
         return get_model(spec, params)
+    if not spec.strip():
+        raise ModelError(f"empty model name (known models: {_known()}; or a .toml/.json file)")
     path = Path(spec)
-    if path.suffix.lower() not in _MODEL_FILE_SUFFIXES and not path.exists():
+    problem = _file_problem(path)
+    if path.suffix.lower() not in _MODEL_FILE_SUFFIXES and problem == "not found":
         raise ModelError(
-            f"unknown model {spec!r}: not a built-in (known models: {_known()}) "
+            f"unknown model {_shown(spec)!r}: not a built-in (known models: {_known()}) "
             "and not a model file (.toml or .json)"
         )
-    if not path.exists():
-        raise ModelError(f"model file {spec!r} not found")
+    if problem is not None:
+        raise ModelError(f"model file {_shown(spec)!r} {problem}")
     from nilpotent.core.modelfile import load_model_file  # lazy: written alongside
 
     system = load_model_file(path)

@@ -70,7 +70,16 @@ def _usable(folder: Path) -> bool:
         folder.mkdir(mode=0o700, exist_ok=True)
     except OSError:
         return False
-    return safe_folder(folder) is None and os.access(folder, os.W_OK | os.X_OK)
+    if safe_folder(folder) is not None or not os.access(folder, os.W_OK | os.X_OK):
+        return False
+    # numba keeps its compiled code (pickles, loaded as code) in __pycache__: that folder
+    # must be as safe as the cache itself (made here 0700 before numba makes it)
+    bytecode = folder / "__pycache__"
+    try:
+        bytecode.mkdir(mode=0o700, exist_ok=True)
+    except OSError:
+        return False
+    return safe_folder(bytecode) is None
 
 
 def _private_folder() -> Path:
@@ -101,7 +110,10 @@ def cache_dir() -> Path:
         return folder
     if "warned" not in _private:
         _private["warned"] = folder
-        why = safe_folder(folder) or "it cannot be created or written"
+        why = safe_folder(folder) or (
+            f"its __pycache__ folder is not safe: {inner}"
+            if (inner := safe_folder(folder / "__pycache__")) and folder.is_dir()
+            else "it cannot be created or written")
         warnings.warn(
             f"nilpotent: not using the code cache {folder}: {why}; generated code goes to a "
             "private temporary folder (no cache between runs). Fix: chmod 700 the folder, "
@@ -186,7 +198,9 @@ def load_generated_module(
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     try:
-        spec.loader.exec_module(module)
+        # run the text generated here, never a cached .pyc beside the file (one planted
+        # in __pycache__ would otherwise be imported in place of the checked source)
+        exec(compile(data, str(path), "exec", dont_inherit=True), module.__dict__)
     except BaseException:
         sys.modules.pop(name, None)
         raise

@@ -9,7 +9,14 @@ coordinates — becomes a :class:`CompiledSystem` with
 * ``rhs(x, u)``: ``(B, n)``, ``Σ_i u[b, i] X_i(x[b])``;
 * ``jacobian(x)``: ``(B, m, n, n)``, ``[b, i, j, k] = ∂X_{i+1}^j/∂x_k`` at ``x[b]``;
 * ``kernels``: the numba module (single-state ``fields``/``rhs`` and the batched
-  integrators of :mod:`nilpotent.numeric.kernels`), compiled on first use.
+  integrators of :mod:`nilpotent.numeric.kernels`), compiled on first use;
+
+and any vector map given by expressions (the privileged coordinates ``y(x)``
+and their inverse ``x(y)``) becomes a :class:`CompiledMap` (:func:`compile_map`)
+through the same code generator: there is no second compiler.
+:func:`compile_system` is memoised per (system, backend): simulations, plans and
+sweeps that compile the same system share one :class:`CompiledSystem` (whose
+generated modules are the on-disk cache of :mod:`nilpotent.numeric.cache`).
 
 Code is printed from the expressions with sympy's code printers (common
 subexpressions eliminated), written to a ``.py`` file in the cache directory
@@ -29,7 +36,7 @@ from __future__ import annotations
 import importlib.util
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 from types import ModuleType
 from typing import Any
 
@@ -331,13 +338,96 @@ def compile_fields(
 
 
 def compile_system(system: Any, *, backend: str = "auto") -> CompiledSystem:
-    """Compile a :class:`~nilpotent.core.system.ControlSystem` (parameters substituted)."""
+    """Compile a :class:`~nilpotent.core.system.ControlSystem` (parameters substituted).
+
+    Memoised per ``(system, backend)`` (the 128 most recent): compiling is
+    symbolic work (substitution, hashing) worth doing once per system.
+
+    Parameters
+    ----------
+    system : ControlSystem
+        The system (or anything hashable with ``coordinates``, ``specialized_fields``
+        and ``name``).
+    backend : str
+        As in :func:`compile_fields`.
+    """
+    return _compile_system(system, backend)
+
+
+@lru_cache(maxsize=128)
+def _compile_system(system: Any, backend: str) -> CompiledSystem:
     return compile_fields(
         system.coordinates,
         system.specialized_fields,
         name=system.name,
         backend=backend,
     )
+
+
+@dataclass(frozen=True, eq=False)
+class CompiledMap:
+    """A compiled vector map ``R^n → R^n``, ``z ↦ (f_1(z), …, f_n(z))``, over any batch shape.
+
+    Built by :func:`compile_map`; calling it on an array of shape ``(..., n)``
+    returns ``(..., n)`` (one point ``(n,)`` gives ``(n,)``).  Picklable: the
+    receiving process reloads the generated module from the cache.
+
+    Attributes
+    ----------
+    system:
+        The map as the single "field" of a :class:`CompiledSystem` (numpy backend).
+    """
+
+    system: CompiledSystem
+
+    @property
+    def name(self) -> str:
+        return self.system.name
+
+    @property
+    def n(self) -> int:
+        return self.system.n
+
+    def __call__(self, points: Any) -> np.ndarray:
+        arr = np.asarray(points, dtype=np.float64)
+        if arr.ndim == 0 or arr.shape[-1] != self.n:
+            raise OptionError(f"{self.name}: points must have shape (..., {self.n}), "
+                              f"got {arr.shape}")
+        flat = np.ascontiguousarray(arr.reshape(-1, self.n))
+        values = self.system.numpy_module.fields(flat)[:, :, 0]
+        return values.reshape(arr.shape)
+
+
+def compile_map(
+    coordinates: Sequence[sp.Symbol],
+    expressions: Sequence[sp.Expr],
+    params: Mapping[str | sp.Symbol, Any] | None = None,
+    *,
+    name: str = "map",
+) -> CompiledMap:
+    """Compile the map ``coordinates ↦ expressions`` (as many expressions as coordinates).
+
+    Parameters
+    ----------
+    coordinates:
+        The ``n`` argument symbols, in order.
+    expressions:
+        ``n`` sympy expressions of them (e.g. ``PrivilegedCoordinates.forward``
+        of the model coordinates, or ``.inverse`` of the privileged names).
+    params:
+        Values of the other symbols (as in :func:`compile_fields`).
+    name:
+        Label for messages and generated files.
+
+    Raises
+    ------
+    ModelError
+        A count that differs from the coordinates', or a symbol without a value.
+    """
+    exprs = tuple(expressions)
+    if len(exprs) != len(tuple(coordinates)):
+        raise ModelError(f"{name}: a map needs as many expressions as coordinates")
+    return CompiledMap(compile_fields(coordinates, [exprs], params, name=name, backend="numpy"))
 
 
 # --- code generation ---------------------------------------------------------

@@ -8,7 +8,7 @@ nfixed, rtol, atol, max_steps, min_step, bound, xf, samples, info)``
 
 a ``prange`` loop over the batch.  Per trajectory it integrates
 ``dx/dt = Σ u_i(t) X_i(x)`` through the input segments
-(:class:`~nilpotent.numeric.inputs.HarmonicInputs`), restarting at each segment
+(:class:`~nilpotent.numeric.signals.Signal`), restarting at each segment
 boundary (inputs may jump there), with the DOP853 tableau
 (:data:`~nilpotent.numeric.tableaux.DOP853`) unrolled into straight-line code:
 

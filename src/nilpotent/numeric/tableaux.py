@@ -1,7 +1,7 @@
 """Butcher tableaux of the explicit Runge–Kutta methods, as class data.
 
 A method is data (its coefficients) plus a name in :data:`TABLEAUX`; the
-integrators (:mod:`nilpotent.numeric.integrators`) and the generated numba
+integrators (:mod:`nilpotent.numeric.integrate`) and the generated numba
 kernels (:mod:`nilpotent.numeric.kernels`) read the coefficients from here.
 
 Convention: for ``dx/dt = f(t, x)`` and a step ``h`` from ``(t, x)``,

@@ -14,12 +14,12 @@ from nilpotent.planning.controls import reverse_segments as reverse_segments
 from nilpotent.planning.exact_flow import endpoint as endpoint
 from nilpotent.planning.iterative import Iteration as Iteration
 from nilpotent.planning.iterative import Plan as Plan
-from nilpotent.planning.iterative import Trajectory as Trajectory
 from nilpotent.planning.iterative import plan as plan
 from nilpotent.planning.local_model import LocalModel as LocalModel
 from nilpotent.planning.nilpotent import NilpotentSteering as NilpotentSteering
 from nilpotent.planning.nilpotent import steer_nilpotent as steer_nilpotent
 from nilpotent.planning.triangular import TriangularSystem as TriangularSystem
+from nilpotent.simulation.trajectory import Trajectory as Trajectory
 
 __all__ = [
     "InputSignal",

@@ -45,7 +45,8 @@ from nilpotent.planning.controls import (
 )
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
-from nilpotent.planning.simulation import resolve_engine, simulate_candidates, simulate_path
+from nilpotent.planning.simulation import simulate_candidates, simulate_plan, single_engine
+from nilpotent.simulation.trajectory import Trajectory
 
 ANCHORS = ("current", "goal", "start")
 #: Relative finite-difference step of the shooting refinement's Jacobian.
@@ -93,14 +94,6 @@ class Iteration:
 
 
 @dataclass(frozen=True, eq=False)
-class Trajectory:
-    """Samples of the true system under the plan: ``times (N,)``, ``states (N, n)``."""
-
-    times: np.ndarray
-    states: np.ndarray
-
-
-@dataclass(frozen=True, eq=False)
 class Plan:
     """Controls steering a system from ``start`` to ``goal``, with what they reach.
 
@@ -120,7 +113,8 @@ class Plan:
     iterations:
         One :class:`Iteration` per nilpotent step.
     trajectory:
-        Samples of the true trajectory (for plots and animations).
+        The true system's :class:`~nilpotent.simulation.trajectory.Trajectory`
+        under ``segments`` (samples for plots and animations).
     tol:
         The tolerance asked for; ``converged`` says whether ``error ≤ tol``.
     anchor, builder:
@@ -153,6 +147,12 @@ class Plan:
     def duration(self) -> float:
         """Total duration of the controls."""
         return float(sum(s.duration for s in self.segments))
+
+    def plot(self) -> Any:
+        """The plan's figure (:func:`nilpotent.viz.plan.plot_plan`): path, errors, inputs."""
+        from nilpotent.viz.plan import plot_plan
+
+        return plot_plan(self)
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/plan@1`` object of INTERFACE.md (plus extra fields)."""
@@ -415,7 +415,7 @@ def plan(
         Samples per segment of :attr:`Plan.trajectory`.
     engine:
         Integration engine of the true system
-        (:data:`nilpotent.planning.simulation.ENGINES`).
+        (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
     refine:
         When the nilpotent iterations stop short of ``tol`` (no progress or
         ``max_iterations``), finish with the shooting refinement of the last
@@ -467,7 +467,7 @@ def plan(
     initial_error = float(np.linalg.norm(x0 - xg))
     guess: list[Segment] = []  # first nilpotent step, if it made no progress
     if handover is None:
-        fast = refine and resolve_engine(engine, system) == "numba"
+        fast = refine and single_engine(engine, system) == "numba"
         high_step = choose_builder(system, x0) == "symbolic"  # step >= 3 near the start
         handover = HANDOVER if fast and high_step else 0.0
     elif not (handover >= 0 and math.isfinite(handover)):
@@ -522,7 +522,7 @@ def plan(
             failure = (
                 f"{failure}; the shooting refinement then went from {before:.3g} to {error:.3g}"
             )
-    times, states = simulate_path(system, x0, segments, trajectory_points, engine)
+    trajectory = simulate_plan(system, x0, segments, trajectory_points, engine)
     result = Plan(
         system=system,
         start=tuple(float(v) for v in x0),
@@ -531,7 +531,7 @@ def plan(
         reached=tuple(float(v) for v in x),
         error=error,
         iterations=tuple(history),
-        trajectory=Trajectory(times, states),
+        trajectory=trajectory,
         tol=tol,
         anchor=anchor,
         builder=builder,

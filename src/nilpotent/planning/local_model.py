@@ -24,7 +24,7 @@ Two builders (registry :data:`BUILDERS`):
 ``"symbolic"`` (any step)
     :func:`nilpotent.core.approximation.approximate` at the point (exact
     symbolic work, cached per point), its fields converted to floats and its
-    coordinate maps compiled with ``lambdify``.
+    coordinate maps compiled by :func:`nilpotent.numeric.compile.compile_map`.
 
 Regularity is checked numerically: the growth vector at ``p`` (ranks of the
 fields and of fields plus brackets, relative singular-value tolerance
@@ -43,7 +43,7 @@ import sympy as sp
 
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NotBracketGeneratingError, PlanningError, SingularPointError
-from nilpotent.numeric.compile import CompiledSystem, compile_system
+from nilpotent.numeric.compile import CompiledSystem, compile_map, compile_system
 from nilpotent.planning.triangular import TriangularSystem
 
 #: Relative tolerance on singular values deciding numerical ranks.
@@ -105,14 +105,10 @@ def numeric_growth(compiled: CompiledSystem, p: np.ndarray) -> tuple[int, int]:
     return _rank(fields), _rank(np.hstack([fields, brackets]))
 
 
-@lru_cache(maxsize=64)
-def _compiled(system: ControlSystem) -> CompiledSystem:
-    return compile_system(system)
-
-
 def compiled_system(system: ControlSystem) -> CompiledSystem:
-    """The compiled fields of ``system`` (parameters substituted; memoised)."""
-    return _compiled(system)
+    """The compiled fields of ``system`` (parameters substituted; memoised by
+    :func:`~nilpotent.numeric.compile.compile_system`)."""
+    return compile_system(system)
 
 
 def generic_growth(compiled: CompiledSystem, p: np.ndarray, seed: int = 0) -> tuple[int, int]:
@@ -235,7 +231,7 @@ def symbolic_model(system: ControlSystem, point: Sequence[object]) -> LocalModel
 
     The point is made exact (:func:`exact_point`) and the symbolic work is
     cached per (system, point); the result is converted to a
-    :class:`TriangularSystem` and lambdified coordinate maps.
+    :class:`TriangularSystem` and compiled coordinate maps.
     """
     return _symbolic_model(system, exact_point(point))
 
@@ -259,17 +255,10 @@ def _symbolic_model(system: ControlSystem, point: tuple[sp.Expr, ...]) -> LocalM
     names = tuple(approx.coordinates.names)
     tri = TriangularSystem.from_fields(approx.fields, names, tuple(filt.weights))
     params = {sp.Symbol(k): v for k, v in system.parameters}
-    fwd_exprs = [sp.S(e).xreplace(params) for e in approx.coordinates.forward]
-    inv_exprs = [sp.S(e).xreplace(params) for e in approx.coordinates.inverse]
-    fwd = sp.lambdify([system.coordinates], fwd_exprs, "numpy")
-    inv = sp.lambdify([names], inv_exprs, "numpy")
-
-    def forward(x: np.ndarray) -> np.ndarray:
-        return np.asarray(fwd(np.asarray(x, dtype=float)), dtype=float).reshape(-1)
-
-    def inverse(y: np.ndarray) -> np.ndarray:
-        return np.asarray(inv(np.asarray(y, dtype=float)), dtype=float).reshape(-1)
-
+    forward = compile_map(system.coordinates, approx.coordinates.forward, params,
+                          name=f"{system.name}-forward")
+    inverse = compile_map(names, approx.coordinates.inverse, params,
+                          name=f"{system.name}-inverse")
     return LocalModel(
         tuple(fpoint), tri, forward, inverse, tuple(filt.growth_vector), "symbolic"
     )

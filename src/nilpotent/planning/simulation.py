@@ -1,7 +1,7 @@
 """Simulation of the true system under plan controls (through :mod:`nilpotent.numeric`).
 
 Segments (:class:`~nilpotent.planning.controls.Segment`) are converted to the
-numeric layer's :class:`~nilpotent.numeric.inputs.HarmonicInputs` (the same
+numeric layer's :class:`~nilpotent.numeric.signals.Signal` (``Signal.stack``; the same
 format: constant plus ``cos``/``sin`` harmonics, time restarting in every
 segment) and integrated with adaptive DOP853 at tight tolerances.  Several
 candidate controls from the same state are integrated as one batch.
@@ -15,58 +15,24 @@ from collections.abc import Sequence
 import numpy as np
 
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import IntegrationError, OptionError
-from nilpotent.numeric.compile import numba_available
-from nilpotent.numeric.inputs import HarmonicInputs
-from nilpotent.numeric.integrators import integrate, kernels_cached
+from nilpotent.errors import IntegrationError
+from nilpotent.numeric.engines import choose_engine
+from nilpotent.numeric.integrate import Status, integrate
+from nilpotent.numeric.signals import Signal
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
+from nilpotent.simulation.trajectory import Trajectory, simulate, stationary
 
 #: Tolerances of the true-system integration (DOP853).
 RTOL = 1e-12
 ATOL = 1e-13
 
 
-def harmonic_inputs(batch: Sequence[Sequence[Segment]]) -> HarmonicInputs:
-    """Pack several control sequences (same number of segments) into ``HarmonicInputs``."""
-    b = len(batch)
-    s = len(batch[0])
-    m = batch[0][0].m
-    k = max((i.harmonics for segs in batch for seg in segs for i in seg.inputs), default=0)
-    durations = np.zeros((b, s))
-    omegas = np.zeros((b, s))
-    constant = np.zeros((b, s, m))
-    cos = np.zeros((b, s, m, k))
-    sin = np.zeros((b, s, m, k))
-    for bi, segs in enumerate(batch):
-        for si, seg in enumerate(segs):
-            durations[bi, si] = seg.duration
-            omegas[bi, si] = seg.omega
-            for i, sig in enumerate(seg.inputs):
-                constant[bi, si, i] = sig.constant
-                cos[bi, si, i, : len(sig.cos)] = sig.cos
-                sin[bi, si, i, : len(sig.sin)] = sig.sin
-    return HarmonicInputs(durations, omegas, constant, cos, sin)
-
-
-#: Integration engines: ``"numba"`` (compiled DOP853, about 1 ms per trajectory;
-#: the first use of a model compiles its kernels, about 10 s, cached on disk),
-#: ``"scipy"`` (solve_ivp DOP853, no compilation, about 50 ms per segment),
-#: ``"auto"`` (numba when its kernels for the system are already cached, else
-#: scipy: one plan costs less than a compilation).
-ENGINES = ("auto", "numba", "scipy")
-
-
-def resolve_engine(engine: str, system: ControlSystem) -> str:
-    """The engine ``engine`` (one of :data:`ENGINES`) means for ``system``."""
-    if engine not in ENGINES:
-        raise OptionError(f"unknown engine {engine!r} (choose from {', '.join(ENGINES)})")
-    if engine == "numba" and not numba_available():
-        raise OptionError("the numba engine needs numba installed")
-    if engine == "auto":
-        cached = numba_available() and kernels_cached(compiled_system(system))
-        return "numba" if cached else "scipy"
-    return engine
+def single_engine(engine: str, system: ControlSystem) -> str:
+    """The engine (:mod:`nilpotent.numeric.engines`) that ``engine`` means for one trajectory
+    of ``system``: with ``"auto"``, numba when its kernels for the system are already
+    compiled, else scipy (one plan costs less than a compilation)."""
+    return choose_engine(compiled_system(system), "adaptive", engine, 1).name
 
 
 def simulate_candidates(
@@ -86,10 +52,10 @@ def simulate_candidates(
         if length == 0:
             out[idxs] = x
             continue
-        inputs = harmonic_inputs([candidates[i] for i in idxs])
+        inputs = Signal.stack([candidates[i] for i in idxs])
         sol = integrate(
             compiled, np.repeat(x[None, :], len(idxs), axis=0), inputs,
-            engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL,
+            engine=single_engine(engine, system), rtol=RTOL, atol=ATOL,
         )
         final = np.array(sol.final)
         final[~sol.ok] = np.nan
@@ -104,10 +70,34 @@ def simulate_path(
     points_per_segment: int = 40,
     engine: str = "auto",
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``(times, states)`` of the true system under ``segments``, sampled in every segment."""
+    """``(times, states)`` of the true system under ``segments`` (:func:`simulate_plan`'s samples).
+
+    Raises
+    ------
+    IntegrationError
+        The integration stopped before the end of the controls.
+    """
+    traj = simulate_plan(system, x0, segments, points_per_segment, engine)
+    return np.array(traj.times), np.array(traj.states)
+
+
+def simulate_plan(
+    system: ControlSystem,
+    x0: Sequence[float],
+    segments: Sequence[Segment],
+    points_per_segment: int = 40,
+    engine: str = "auto",
+) -> Trajectory:
+    """The true system's :class:`~nilpotent.simulation.trajectory.Trajectory` under
+    ``segments``, sampled ``points_per_segment`` times in every segment.
+
+    Raises
+    ------
+    IntegrationError
+        The integration stopped before the end of the controls.
+    """
     if not segments:
-        x = np.asarray(x0, dtype=float)
-        return np.zeros(1), x[None, :]
+        return stationary(compiled_system(system), x0)
     starts = np.concatenate([[0.0], np.cumsum([s.duration for s in segments])])
     times = np.unique(
         np.concatenate(
@@ -115,16 +105,14 @@ def simulate_path(
         )
     )
     times = times[times <= starts[-1]]
-    sol = integrate(
-        compiled_system(system), np.asarray(x0, dtype=float), harmonic_inputs([segments]),
-        engine=resolve_engine(engine, system), rtol=RTOL, atol=ATOL, times=times,
+    traj = simulate(
+        compiled_system(system), Signal.from_segments(segments), np.asarray(x0, dtype=float),
+        times=times, engine=single_engine(engine, system), rtol=RTOL, atol=ATOL,
     )
-    if not sol.all_ok:
-        from nilpotent.numeric.integrators import Status
-
+    if traj.status != Status.SUCCESS:
         raise IntegrationError(
             f"simulating the plan of {system.name!r} failed: "
-            f"{Status(int(sol.status[0])).message} (the controls drive the system where "
+            f"{traj.status.message} (the controls drive the system where "
             "it cannot be integrated; try a nearer goal, --anchor goal or fewer iterations)"
         )
-    return np.array(sol.times), np.array(sol.samples[0])
+    return traj

@@ -10,7 +10,6 @@ the HTML of ``index.html`` with the building blocks of
 from __future__ import annotations
 
 import html
-from collections.abc import Mapping
 from typing import Any
 
 import sympy as sp
@@ -18,6 +17,7 @@ import sympy as sp
 from nilpotent.models.trident import BODY_LEG_ANGLES, PAPER_LEG_ANGLES
 from nilpotent.report.audit import Audit, format_field
 from nilpotent.report.page import animation, code, figure, page, table
+from nilpotent.report.reproduction_data import PageFigures, ReproductionData
 
 __all__ = ["build_page"]
 
@@ -117,25 +117,13 @@ def _audit_table(audit: Audit) -> str:
     )
 
 
-def build_page(
-    *,
-    paper,
-    audit: Audit,
-    systems: Mapping[str, Any],
-    filtrations: Mapping[str, Any],
-    approximations: Mapping[str, Any],
-    motions: Mapping[tuple[str, tuple[int, int]], Any],
-    brackets: Mapping[tuple[str, tuple[int, int]], Any],
-    studies: Mapping[tuple[str, tuple[int, int]], Any],
-    s4_names: Mapping[tuple[int, int], int],
-    fig_motion: Mapping[tuple[int, int], str],
-    fig_compare: Mapping[tuple[str, tuple[int, int]], str],
-    anim_files: Mapping[tuple[int, int], Any],
-    scaling_stems: Mapping[str, str],
-    settings,
-    quick: bool,
-) -> str:
+def build_page(data: ReproductionData, figures: PageFigures) -> str:
     """The HTML of ``index.html`` (see :mod:`nilpotent.report.pipeline`)."""
+    paper, audit, settings, quick = data.paper, data.audit, data.settings, data.quick
+    systems, filtrations, approximations = data.systems, data.filtrations, data.approximations
+    motions, brackets, studies, s4_names = data.motions, data.brackets, data.studies, data.s4_names
+    fig_motion, fig_compare = figures.motion, figures.comparison
+    anim_files, scaling_stems = figures.animations, figures.amplitude
     body, vf = systems["body"], systems["vf"]
     pairs = ((1, 2), (2, 3), (1, 3))
     n_diff = len(audit.differing)
@@ -299,7 +287,8 @@ def build_page(
         "brackets) loses rank where the wheels' body-frame positions are collinear; the "
         "determinant depends on x4, x5, x6 only.</p>"
         + _fig(
-            "singular_set_vf", "Singular set of eq. vf in the (x4, x5) plane for four values of x6"
+            figures.singular_set,
+            "Singular set of eq. vf in the (x4, x5) plane for four values of x6",
         )
     )
 

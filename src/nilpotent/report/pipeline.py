@@ -15,10 +15,15 @@ r"""``reproduce``: the paper's pipeline end to end, written as an offline web pa
 5. the amplitude study (error against amplitude, log–log, fitted slopes);
 6. the singular set of eq. vf;
 
-and writes ``DIR/index.html`` (self-contained: inline CSS and script, images
-as relative files under ``DIR/figures/``, nothing fetched), ``DIR/figures/``
-(PNG + SVG of every figure, GIF + HTML player (+ MP4 with ffmpeg) of every
-animation), ``DIR/data/`` (CSV/JSON of every number shown) and
+each a small named function (``_audit_paper``, ``_analyse_models``,
+``_approximate_models``, ``_bracket_motions``, ``_amplitude_study``) whose
+results fill one typed :class:`~nilpotent.report.reproduction_data.ReproductionData`;
+writing steps then turn it into files (``_write_data``, ``_write_figures``,
+``_write_animations``, ``_write_page``).  It writes ``DIR/index.html``
+(self-contained: inline CSS and script, images as relative files under
+``DIR/figures/``, nothing fetched), ``DIR/figures/`` (PNG + SVG of every
+figure, GIF + HTML player (+ MP4 with ffmpeg) of every animation), ``DIR/data/``
+(CSV/JSON of every number shown) and
 ``DIR/audit.json`` (schema ``nilpotent/audit@1``).
 
 Everything is written into a temporary folder beside ``DIR`` and moved into
@@ -34,28 +39,41 @@ themselves, and Figs 2–7 follow Section 4's names (``g4 = [g1,g2]``,
 
 from __future__ import annotations
 
-import csv
-import json
 import os
 import shutil
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import sympy as sp
 
-from nilpotent.errors import OptionError
 from nilpotent.outputs import remove_stale_temporaries, temporary_prefix
+from nilpotent.progress import progress as report_progress
+from nilpotent.report.output import check_target, move_into_place, write_csv, write_json
+from nilpotent.report.reproduction_data import (
+    BRACKET_PAIRS,
+    MODEL_KEYS,
+    PageFigures,
+    ReproductionData,
+    Settings,
+)
+
+if TYPE_CHECKING:
+    from nilpotent.core.system import ControlSystem
+    from nilpotent.report.audit import Audit
 
 __all__ = [
     "DEFAULT_OUT",
     "FULL",
     "QUICK",
+    "PageFigures",
     "Reproduction",
+    "ReproductionData",
     "Settings",
     "reproduce",
 ]
@@ -64,18 +82,6 @@ __all__ = [
 DEFAULT_OUT = "nilpotent-paper"
 
 Progress = Callable[[str, int, int], None]
-
-
-@dataclass(frozen=True)
-class Settings:
-    """How much to compute: amplitudes, samples per trajectory, animation frames."""
-
-    figure_amplitude: float
-    samples: int
-    frames: int
-    amplitudes: tuple[float, ...]
-    dpi: int
-    animation_dpi: int
 
 
 #: The full reproduction.
@@ -91,7 +97,7 @@ class Reproduction:
     out_dir: Path
     index: Path
     audit_path: Path
-    audit: Any  # nilpotent.report.audit.Audit
+    audit: Audit
     figures: tuple[Path, ...]
     data: tuple[Path, ...]
     animations: tuple[Path, ...]
@@ -100,15 +106,15 @@ class Reproduction:
     seconds: float
     timings: dict[str, float] = field(default_factory=dict)
 
-    def summary(self) -> dict[str, Any]:
-        """A JSON-ready summary (``nilpotent/reproduce@1``) for ``--json``."""
+    def to_json(self) -> dict[str, Any]:
+        """The ``nilpotent/reproduce@1`` summary that ``nilpotent reproduce --json`` prints."""
         return {
             "schema": "nilpotent/reproduce@1",
             "out": str(self.out_dir),
             "index": str(self.index),
             "audit": str(self.audit_path),
             "quick": self.quick,
-            "audit_summary": self.audit.as_json()["summary"],
+            "audit_summary": self.audit.to_json()["summary"],
             "differs": [e.id for e in self.audit.differing],
             "figures": [str(p) for p in self.figures],
             "animations": [str(p) for p in self.animations],
@@ -119,66 +125,11 @@ class Reproduction:
         }
 
 
-# --- output folder handling ---------------------------------------------------------
-def _check_target(target: Path) -> None:
-    from nilpotent.report.audit import AUDIT_SCHEMA
-
-    if not target.exists():
-        if not target.parent.exists():
-            raise OptionError(f"cannot write {target}: folder {target.parent} does not exist")
-        return
-    if not target.is_dir():
-        raise OptionError(f"--out {target} exists and is not a folder")
-    if not any(target.iterdir()):
-        return
-    audit = target / "audit.json"
-    try:
-        ours = json.loads(audit.read_text(encoding="utf-8")).get("schema") == AUDIT_SCHEMA
-    except (OSError, ValueError, AttributeError):
-        ours = False
-    if not ours:
-        raise OptionError(
-            f"--out {target} exists and is not a previous reproduction (no {AUDIT_SCHEMA} "
-            "audit.json in it); choose another folder or remove it"
-        )
-
-
-def _move_into_place(tmp: Path, target: Path, existed: bool = True) -> None:
-    if target.exists() and not existed:
-        raise OptionError(
-            f"--out {target} was created by something else while the reproduction ran; it is "
-            "left untouched (run again, or choose another folder)"
-        )
-    _check_target(target)  # again: what is there now must still be a previous reproduction
-    if target.exists():
-        old = Path(tempfile.mkdtemp(prefix=temporary_prefix(target, "old"), dir=target.parent))
-        os.replace(target, old / target.name)
-        os.replace(tmp, target)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(tmp, target)
-
-
 # --- formatting ----------------------------------------------------------------------
 def _fmt(value: Any) -> str:
     from nilpotent.core.expressions import format_expression
 
     return format_expression(sp.S(value))
-
-
-def _write_json(path: Path, obj: Any) -> Path:
-    from nilpotent.strict_json import json_text
-
-    path.write_text(json_text(obj), encoding="utf-8")
-    return path
-
-
-def _write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence[Any]]) -> Path:
-    with path.open("w", newline="", encoding="utf-8") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(header)
-        writer.writerows(rows)
-    return path
 
 
 def _model_payload(system, filtration, approx) -> dict[str, Any]:
@@ -219,9 +170,6 @@ def _model_payload(system, filtration, approx) -> dict[str, Any]:
 
 
 # --- the pipeline -------------------------------------------------------------------
-_PAIRS = ((1, 2), (2, 3), (1, 3))
-
-
 def reproduce(
     out_dir: str | os.PathLike[str] = DEFAULT_OUT,
     quick: bool = False,
@@ -232,20 +180,29 @@ def reproduce(
 
     Parameters
     ----------
-    out_dir:
+    out_dir : str or path
         The folder to write (default ``./nilpotent-paper``); replaced whole at
         the end (see the module docstring for when it is refused).
-    quick:
+    quick : bool
         Fewer amplitudes, samples and frames (:data:`QUICK` instead of :data:`FULL`).
-    progress:
-        Called as ``progress(step, done, total)`` before each step.
+    progress : callable or None
+        Called as ``progress(step, done, total)`` before each step (the steps
+        are also reported on stderr through :mod:`nilpotent.progress` when
+        that is enabled).
 
     Returns
     -------
     Reproduction
+        The files written (inside ``out_dir``) and the audit.
+
+    Raises
+    ------
+    OptionError
+        ``out_dir`` cannot be written or is a folder that is not a previous
+        reproduction.
     """
     target = Path(out_dir).resolve()
-    _check_target(target)
+    check_target(target)
     existed = target.exists()
     remove_stale_temporaries(target)  # left by runs killed outright
     settings = QUICK if quick else FULL
@@ -255,7 +212,7 @@ def reproduce(
     os.chmod(tmp, 0o777 & ~mask)  # mkdtemp makes it private; the result is an ordinary folder
     try:
         result = _run(tmp, settings, quick, progress)
-        _move_into_place(tmp, target, existed)
+        move_into_place(tmp, target, existed)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -285,65 +242,187 @@ _STEPS = (
     "auditing the paper",
     "analysing the models",
     "nilpotent approximations",
-    "bracket motions (Figs 2-4)",
-    "comparisons (Figs 5-7)",
-    "animations",
+    "bracket motions (Figs 2-7)",
     "amplitude study",
-    "singular set",
+    "writing the data",
+    "figures (Figs 2-7, amplitude, singular set)",
+    "animations",
     "writing the page",
 )
 
 
-def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) -> Reproduction:
-    from nilpotent.core.approximation import approximate
-    from nilpotent.core.brackets import word_values_at
-    from nilpotent.core.filtration import analyze
-    from nilpotent.models import get_model
-    from nilpotent.models.trident import TridentGeometry
-    from nilpotent.report.audit import run_audit
-    from nilpotent.report.paper import read_paper
-    from nilpotent.simulate import compare_bracket_motion, scaling_study
-    from nilpotent.viz import (
-        animate_motion_comparison,
-        plot_bracket_motion,
-        plot_error_scaling,
-        plot_motion_comparison,
-        plot_paper_singular_set,
-        save_animation,
-        save_figure,
+class _Steps:
+    """Times the named steps and reports them (callback and :mod:`nilpotent.progress`)."""
+
+    def __init__(self, callback: Progress | None, bar: Any) -> None:
+        self.callback = callback
+        self.bar = bar
+        self.done = 0
+        self.timings: dict[str, float] = {}
+
+    @contextmanager
+    def step(self, name: str) -> Iterator[None]:
+        if self.callback is not None:
+            self.callback(name, self.done, len(_STEPS))
+        self.bar.update(self.done, detail=name)
+        start = time.perf_counter()
+        yield
+        self.timings[name] = time.perf_counter() - start
+        self.done += 1
+        self.bar.update(self.done)
+
+
+@dataclass
+class _Files:
+    """The folders written into and the files written so far (paths under ``out``)."""
+
+    out: Path
+    figures: list[Path] = field(default_factory=list)
+    data: list[Path] = field(default_factory=list)
+    animations: list[Path] = field(default_factory=list)
+
+    @property
+    def figures_dir(self) -> Path:
+        return self.out / "figures"
+
+    @property
+    def data_dir(self) -> Path:
+        return self.out / "data"
+
+
+def _run(out: Path, settings: Settings, quick: bool, callback: Progress | None) -> Reproduction:
+    start = time.perf_counter()
+    files = _Files(out)
+    files.figures_dir.mkdir()
+    files.data_dir.mkdir()
+    with report_progress("reproduce", total=len(_STEPS)) as bar:
+        steps = _Steps(callback, bar)
+        with steps.step(_STEPS[0]):
+            paper, audit = _audit_paper()
+        with steps.step(_STEPS[1]):
+            systems, filtrations = _analyse_models()
+        with steps.step(_STEPS[2]):
+            approximations = _approximate_models(systems)
+        with steps.step(_STEPS[3]):
+            motions, brackets = _bracket_motions(systems, approximations, settings)
+        with steps.step(_STEPS[4]):
+            studies = _amplitude_study(systems, approximations, settings)
+        data = ReproductionData(
+            paper=paper,
+            audit=audit,
+            settings=settings,
+            quick=quick,
+            systems=systems,
+            filtrations=filtrations,
+            approximations=approximations,
+            brackets=brackets,
+            motions=motions,
+            studies=studies,
+        )
+        with steps.step(_STEPS[5]):
+            audit_path = _write_data(data, files)
+        with steps.step(_STEPS[6]):
+            stems = _write_figures(data, files)
+        with steps.step(_STEPS[7]):
+            anim_files = _write_animations(data, files)
+        with steps.step(_STEPS[8]):
+            index = _write_page(data, PageFigures(**stems, animations=anim_files), out)
+    if callback is not None:
+        callback("done", len(_STEPS), len(_STEPS))
+    return Reproduction(
+        out,
+        index,
+        audit_path,
+        audit,
+        tuple(files.figures),
+        tuple(files.data),
+        tuple(files.animations),
+        data.slopes,
+        quick,
+        time.perf_counter() - start,
+        steps.timings,
     )
 
-    start = time.perf_counter()
-    timings: dict[str, float] = {}
-    figures_dir = out / "figures"
-    data_dir = out / "data"
-    figures_dir.mkdir()
-    data_dir.mkdir()
-    figures: list[Path] = []
-    data: list[Path] = []
-    animations: list[Path] = []
-    step_no = 0
 
-    def step(name: str) -> None:
-        nonlocal step_no, last
-        now = time.perf_counter()
-        if step_no > 0:
-            timings[_STEPS[step_no - 1]] = now - last
-        last = now
-        if progress is not None:
-            progress(name, step_no, len(_STEPS))
-        step_no += 1
+# --- computing steps: each fills part of ReproductionData -----------------------------
+def _audit_paper() -> tuple[Any, Audit]:
+    """The paper read from its source, and its audit."""
+    from nilpotent.report.audit import run_audit
+    from nilpotent.report.paper import read_paper
 
-    last = start
-
-    # 1. audit
-    step(_STEPS[0])
     paper = read_paper()
-    audit = run_audit(paper)
-    audit_path = _write_json(out / "audit.json", audit.as_json())
-    data.append(
-        _write_csv(
-            data_dir / "audit.csv",
+    return paper, run_audit(paper)
+
+
+def _analyse_models() -> tuple[dict[str, ControlSystem], dict[str, Any]]:
+    """The two models (``r = l = 1`` for the Section 4 fields) and their filtrations at 0."""
+    from nilpotent.core.filtration import analyze
+    from nilpotent.models import get_model
+
+    systems = {
+        "body": get_model("trident-snake", {"r": sp.Integer(1), "l": sp.Integer(1)}),
+        "vf": get_model("trident-snake-paper"),
+    }
+    return systems, {key: analyze(systems[key]) for key in MODEL_KEYS}
+
+
+def _approximate_models(systems: dict[str, ControlSystem]) -> dict[str, Any]:
+    """Privileged coordinates and the nilpotent approximation of each model."""
+    from nilpotent.core.approximation import approximate
+
+    return {key: approximate(systems[key]) for key in MODEL_KEYS}
+
+
+def _bracket_motions(
+    systems: dict[str, ControlSystem], approximations: dict[str, Any], settings: Settings
+) -> tuple[dict[tuple[str, tuple[int, int]], Any], dict[tuple[str, tuple[int, int]], Any]]:
+    """One period of each periodic bracket input, original against approximation.
+
+    Also the exact brackets ``[g_i, g_j](0)``.
+    """
+    from nilpotent.core.brackets import word_values_at
+    from nilpotent.simulate import compare_bracket_motion
+
+    motions: dict[tuple[str, tuple[int, int]], Any] = {}
+    brackets: dict[tuple[str, tuple[int, int]], tuple[sp.Expr, ...]] = {}
+    for key in MODEL_KEYS:
+        spec = systems[key].specialized()
+        for pair in BRACKET_PAIRS:
+            motions[key, pair] = compare_bracket_motion(
+                systems[key],
+                pair,
+                settings.figure_amplitude,
+                approximation=approximations[key],
+                samples=settings.samples,
+            )
+            (brackets[key, pair],) = word_values_at(spec, [pair], spec.origin())
+    return motions, brackets
+
+
+def _amplitude_study(
+    systems: dict[str, ControlSystem], approximations: dict[str, Any], settings: Settings
+) -> dict[tuple[str, tuple[int, int]], Any]:
+    """Error of the approximation against amplitude, for every model and bracket."""
+    from nilpotent.simulate import scaling_study
+
+    return {
+        (key, pair): scaling_study(
+            systems[key], pair, settings.amplitudes, approximation=approximations[key]
+        )
+        for key in ("vf", "body")
+        for pair in BRACKET_PAIRS
+    }
+
+
+# --- writing steps: files from ReproductionData ----------------------------------------
+def _write_data(data: ReproductionData, files: _Files) -> Path:
+    """``audit.json`` and ``data/`` (audit, models, motions, amplitude study); the audit's path."""
+    audit = data.audit
+    audit_path = write_json(files.out / "audit.json", audit.to_json())
+    d = files.data_dir
+    files.data.append(
+        write_csv(
+            d / "audit.csv",
             ["id", "section", "verdict", "statement", "paper", "computed", "explanation"],
             [
                 [e.id, e.section, e.verdict, e.statement, e.paper, e.computed, e.explanation]
@@ -351,67 +430,63 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
             ],
         )
     )
-
-    # 2. models and filtrations
-    step(_STEPS[1])
-    body = get_model("trident-snake", {"r": sp.Integer(1), "l": sp.Integer(1)})
-    vf = get_model("trident-snake-paper")
-    filt = {"body": analyze(body), "vf": analyze(vf)}
-
-    # 3. approximations
-    step(_STEPS[2])
-    approx = {"body": approximate(body), "vf": approximate(vf)}
-    systems = {"body": body, "vf": vf}
-    payload = {k: _model_payload(systems[k], filt[k], approx[k]) for k in systems}
-    data.append(_write_json(data_dir / "models.json", payload))
-    geometry = {
-        "body": TridentGeometry.for_form("trident-snake"),
-        "vf": TridentGeometry.for_form("trident-snake-paper"),
+    payload = {
+        key: _model_payload(data.systems[key], data.filtrations[key], data.approximations[key])
+        for key in MODEL_KEYS
     }
-    s4_names = {pair: k for k, pair in paper.bracket_labels_sec4.items()}
-
-    # 4-5. motions and comparisons
-    step(_STEPS[3])
-    motions: dict[tuple[str, tuple[int, int]], Any] = {}
-    exact_brackets: dict[tuple[str, tuple[int, int]], tuple[sp.Expr, ...]] = {}
-    for key in ("body", "vf"):
-        spec = systems[key].specialized()
-        for pair in _PAIRS:
-            motions[key, pair] = compare_bracket_motion(
-                systems[key],
-                pair,
-                settings.figure_amplitude,
-                approximation=approx[key],
-                samples=settings.samples,
-            )
-            (exact_brackets[key, pair],) = word_values_at(spec, [pair], spec.origin())
+    files.data.append(write_json(d / "models.json", payload))
     motion_rows = []
-    for (key, pair), m in motions.items():
-        stem = f"motion_{key}_{pair[0]}{pair[1]}"
-        header = (
-            ["t"]
-            + [f"{c}_original" for c in systems[key].coordinate_names]
-            + [f"{c}_approximation" for c in systems[key].coordinate_names]
-        )
+    for (key, pair), m in data.motions.items():
+        names = data.systems[key].coordinate_names
+        header = ["t"] + [f"{c}_original" for c in names] + [f"{c}_approximation" for c in names]
         rows = np.column_stack([m.times, m.original, m.approximate]).tolist()
-        data.append(_write_csv(data_dir / f"{stem}.csv", header, rows))
+        files.data.append(write_csv(d / f"motion_{key}_{pair[0]}{pair[1]}.csv", header, rows))
         motion_rows.append(
             {
-                "model": systems[key].name,
+                "model": data.systems[key].name,
                 "bracket": list(pair),
                 "amplitude": m.amplitude,
-                "bracket_at_0": [_fmt(v) for v in exact_brackets[key, pair]],
+                "bracket_at_0": [_fmt(v) for v in data.brackets[key, pair]],
                 "final_original": m.original[-1].tolist(),
                 "final_approximation": m.approximate[-1].tolist(),
                 "prediction": m.prediction.tolist(),
                 "endpoint_error": m.endpoint_error,
             }
         )
-    data.append(_write_json(data_dir / "motions.json", motion_rows))
-    fig_motion: dict[tuple[int, int], str] = {}
-    for n, pair in enumerate(_PAIRS):
-        m = motions["body", pair]
-        k = s4_names[pair]
+    files.data.append(write_json(d / "motions.json", motion_rows))
+    for (key, pair), st in data.studies.items():
+        header = ["amplitude"] + [f"error_weight_{w}" for w in st.errors]
+        rows = np.column_stack([st.amplitudes, *st.errors.values()]).tolist()
+        files.data.append(write_csv(d / f"amplitude_{key}_{pair[0]}{pair[1]}.csv", header, rows))
+    files.data.append(write_json(d / "slopes.json", data.slopes))
+    return audit_path
+
+
+def _write_figures(data: ReproductionData, files: _Files) -> dict[str, Any]:
+    """Figs 2–7 (and the robot's comparisons), the amplitude study, the singular set."""
+    from nilpotent.models.trident import TridentGeometry
+    from nilpotent.viz import (
+        plot_amplitude_panels,
+        plot_bracket_motion,
+        plot_motion_comparison,
+        plot_paper_singular_set,
+        save_figure,
+    )
+
+    dpi = data.settings.dpi
+    names = data.s4_names
+    geometry = {
+        "body": TridentGeometry.for_form("trident-snake"),
+        "vf": TridentGeometry.for_form("trident-snake-paper"),
+    }
+
+    def save(fig: Any, stem: str) -> str:
+        files.figures.extend(save_figure(fig, files.figures_dir, stem, dpi=dpi))
+        return stem
+
+    motion: dict[tuple[int, int], str] = {}
+    for n, pair in enumerate(BRACKET_PAIRS):
+        m, k = data.motions["body", pair], names[pair]
         fig, _ = plot_bracket_motion(
             m.original,
             geometry["body"],
@@ -419,16 +494,11 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
             title=f"Fig. {n + 2}: g{k} = [g{pair[0]},g{pair[1]}] motion of the robot "
             f"(Section 4 fields, A = {m.amplitude:g})",
         )
-        stem = f"fig{n + 2}_g{k}_motion"
-        figures.extend(save_figure(fig, figures_dir, stem, dpi=settings.dpi))
-        fig_motion[pair] = stem
-
-    step(_STEPS[4])
-    fig_compare: dict[tuple[str, tuple[int, int]], str] = {}
+        motion[pair] = save(fig, f"fig{n + 2}_g{k}_motion")
+    comparison: dict[tuple[str, tuple[int, int]], str] = {}
     for key, label in (("vf", "eq. vf (the paper's form)"), ("body", "Section 4 robot")):
-        for n, pair in enumerate(_PAIRS):
-            m = motions[key, pair]
-            k = s4_names[pair]
+        for n, pair in enumerate(BRACKET_PAIRS):
+            m, k = data.motions[key, pair], names[pair]
             fig, _ = plot_motion_comparison(
                 m.original,
                 m.approximate,
@@ -442,115 +512,52 @@ def _run(out: Path, settings: Settings, quick: bool, progress: Progress | None) 
                 if key == "vf"
                 else f"fig{n + 5}b_g{k}_comparison_robot"
             )
-            figures.extend(save_figure(fig, figures_dir, stem, dpi=settings.dpi))
-            fig_compare[key, pair] = stem
+            comparison[key, pair] = save(fig, stem)
+    amplitude: dict[str, str] = {}
+    for key, label in (("vf", "eq. vf"), ("body", "Section 4 robot")):
+        fig, _ = plot_amplitude_panels(
+            [(pair, data.studies[key, pair]) for pair in BRACKET_PAIRS], label
+        )
+        amplitude[key] = save(fig, f"amplitude_{key}")
+    fig, _ = plot_paper_singular_set(resolution=121 if data.quick else 241)
+    singular_set = save(fig, "singular_set_vf")
+    return {
+        "motion": motion,
+        "comparison": comparison,
+        "amplitude": amplitude,
+        "singular_set": singular_set,
+    }
 
-    # animations of the robot (Section 4 fields) and its approximation
-    step(_STEPS[5])
-    anim_files: dict[tuple[int, int], Any] = {}
-    for pair in _PAIRS:
-        m = motions["body", pair]
-        k = s4_names[pair]
+
+def _write_animations(data: ReproductionData, files: _Files) -> dict[tuple[int, int], Any]:
+    """Animations of the robot (Section 4 fields) and of its approximation, per bracket."""
+    from nilpotent.models.trident import TridentGeometry
+    from nilpotent.viz import animate_motion_comparison, save_animation
+
+    geometry = TridentGeometry.for_form("trident-snake")
+    out: dict[tuple[int, int], Any] = {}
+    for pair in BRACKET_PAIRS:
+        m, k = data.motions["body", pair], data.s4_names[pair]
         anim = animate_motion_comparison(
             m.original,
             m.approximate,
-            geometry["body"],
+            geometry,
             times=m.times,
-            frames=settings.frames,
+            frames=data.settings.frames,
             title=f"[g{pair[0]},g{pair[1]}] (g{k}) motion, A = {m.amplitude:g}",
         )
-        files = save_animation(anim, figures_dir, f"anim_g{k}", dpi=settings.animation_dpi)
-        anim_files[pair] = files
-        animations.extend(p for p in (files.gif, files.html, files.mp4) if p is not None)
-
-    # amplitude study
-    step(_STEPS[6])
-    studies = {
-        (key, pair): scaling_study(
-            systems[key], pair, settings.amplitudes, approximation=approx[key]
+        saved = save_animation(
+            anim, files.figures_dir, f"anim_g{k}", dpi=data.settings.animation_dpi
         )
-        for key in ("vf", "body")
-        for pair in _PAIRS
-    }
-    slopes: dict[str, dict[str, float | None]] = {}
-    for (key, pair), st in studies.items():
-        name = f"{systems[key].name} [X{pair[0]},X{pair[1]}]"
-        slopes[name] = {
-            f"weight {w}": (None if v is None else round(v, 4)) for w, v in st.slopes.items()
-        }
-        header = ["amplitude"] + [f"error_weight_{w}" for w in st.errors]
-        rows = np.column_stack([st.amplitudes, *st.errors.values()]).tolist()
-        data.append(_write_csv(data_dir / f"amplitude_{key}_{pair[0]}{pair[1]}.csv", header, rows))
-    data.append(_write_json(data_dir / "slopes.json", slopes))
-    scaling_stems = {}
-    for key, label in (("vf", "eq. vf"), ("body", "Section 4 robot")):
-        from matplotlib.figure import Figure
+        out[pair] = saved
+        files.animations.extend(p for p in (saved.gif, saved.html, saved.mp4) if p is not None)
+    return out
 
-        fig = Figure(figsize=(12, 4), layout="constrained")
-        axes = fig.subplots(1, 3, sharey=True)
-        for ax, pair in zip(axes, _PAIRS, strict=True):
-            st = studies[key, pair]
-            series = {f"weight {w}": e for w, e in st.errors.items() if st.slopes[w] is not None}
-            bounds = {f"weight {w}": float(st.expected_slopes[w]) for w in st.errors}
-            plot_error_scaling(
-                st.amplitudes, series, lower_bounds=bounds, ax=ax, title=f"[g{pair[0]},g{pair[1]}]"
-            )
-            exact = [f"weight {w}" for w in st.errors if st.slopes[w] is None]
-            if exact:
-                ax.text(
-                    0.02,
-                    0.02,
-                    ", ".join(exact) + f": below the noise floor {st.floor:.1g} (exact)",
-                    transform=ax.transAxes,
-                    fontsize=7,
-                )
-        fig.suptitle(
-            f"{label}: largest error of the nilpotent approximation over one period "
-            "(privileged coordinates by weight; theory: slope ≥ w + 1)"
-        )
-        stem = f"amplitude_{key}"
-        figures.extend(save_figure(fig, figures_dir, stem, dpi=settings.dpi))
-        scaling_stems[key] = stem
 
-    step(_STEPS[7])
-    fig, _ = plot_paper_singular_set(resolution=121 if quick else 241)
-    figures.extend(save_figure(fig, figures_dir, "singular_set_vf", dpi=settings.dpi))
-
-    step(_STEPS[8])
+def _write_page(data: ReproductionData, figures: PageFigures, out: Path) -> Path:
+    """``index.html``."""
     from nilpotent.report.document import build_page
 
-    html_text = build_page(
-        paper=paper,
-        audit=audit,
-        systems=systems,
-        filtrations=filt,
-        approximations=approx,
-        motions=motions,
-        brackets=exact_brackets,
-        studies=studies,
-        s4_names=s4_names,
-        fig_motion=fig_motion,
-        fig_compare=fig_compare,
-        anim_files=anim_files,
-        scaling_stems=scaling_stems,
-        settings=settings,
-        quick=quick,
-    )
     index = out / "index.html"
-    index.write_text(html_text, encoding="utf-8")
-    timings[_STEPS[-1]] = time.perf_counter() - last
-    if progress is not None:
-        progress("done", len(_STEPS), len(_STEPS))
-    return Reproduction(
-        out,
-        index,
-        audit_path,
-        audit,
-        tuple(figures),
-        tuple(data),
-        tuple(animations),
-        slopes,
-        quick,
-        time.perf_counter() - start,
-        timings,
-    )
+    index.write_text(build_page(data, figures), encoding="utf-8")
+    return index

@@ -4,7 +4,12 @@
 * :mod:`~nilpotent.viz.motion` — bracket motions (the paper's Figs 2–7);
 * :mod:`~nilpotent.viz.animation` — GIF / MP4 / self-contained HTML animations;
 * :mod:`~nilpotent.viz.scaling` — error against amplitude, log–log, fitted slopes;
+* :mod:`~nilpotent.viz.simulation` — trajectories, comparisons, scaling studies and
+  sweeps (their ``.plot()`` methods delegate here);
+* :mod:`~nilpotent.viz.plan` — plans: the path (the robot for the trident
+  snake), errors per iteration and inputs; GIF animation;
 * :mod:`~nilpotent.viz.singular` — the singular set of the paper's eq. vf;
+* :mod:`~nilpotent.viz.report_figures` — multi-panel figures of the paper reproduction;
 * :mod:`~nilpotent.viz.export` — saving a figure as PNG + SVG (or PDF).
 
 Figures are built with :class:`matplotlib.figure.Figure` directly (no pyplot
@@ -19,6 +24,7 @@ from nilpotent.viz.animation import save_animation as save_animation
 from nilpotent.viz.export import save_figure as save_figure
 from nilpotent.viz.motion import plot_bracket_motion as plot_bracket_motion
 from nilpotent.viz.motion import plot_motion_comparison as plot_motion_comparison
+from nilpotent.viz.report_figures import plot_amplitude_panels as plot_amplitude_panels
 from nilpotent.viz.robot import TridentArtists as TridentArtists
 from nilpotent.viz.robot import draw_trident as draw_trident
 from nilpotent.viz.robot import update_trident as update_trident
@@ -34,6 +40,7 @@ __all__ = [
     "draw_trident",
     "fit_slope",
     "html_player",
+    "plot_amplitude_panels",
     "plot_bracket_motion",
     "plot_error_scaling",
     "plot_motion_comparison",

@@ -1,4 +1,5 @@
-"""Figures and animations of a :class:`~nilpotent.planning.iterative.Plan`.
+"""Figures and animations of a :class:`~nilpotent.planning.iterative.Plan`
+(:meth:`Plan.plot <nilpotent.planning.iterative.Plan.plot>` delegates here).
 
 For the trident snake forms the robot is drawn with
 :func:`nilpotent.viz.robot.draw_trident` (geometry from
@@ -14,12 +15,15 @@ Functions return figure handles and never call ``plt.show()``.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from nilpotent.planning.controls import input_at
-from nilpotent.planning.iterative import Plan
+
+if TYPE_CHECKING:
+    from nilpotent.planning.iterative import Plan
 
 _TRIDENT_FORMS = ("trident-snake", "trident-snake-paper", "trident-snake-joints")
 
@@ -35,6 +39,15 @@ def _geometry(plan: Plan):
 def _draw_plane(ax, plan: Plan, geometry) -> None:
     states = plan.trajectory.states
     names = plan.system.coordinate_names
+    if geometry is None and states.shape[1] == 1:  # one coordinate: it against time
+        times = plan.trajectory.times
+        ax.plot(times, states[:, 0], color="#0072B2", lw=1.5, label="path")
+        ax.plot(times[0], plan.start[0], "o", color="black", label="start")
+        ax.plot(times[-1], plan.goal[0], "*", color="#D55E00", markersize=12, label="goal")
+        ax.set_xlabel("t")
+        ax.set_ylabel(names[0])
+        ax.legend(fontsize=7, loc="best")
+        return
     if geometry is None:
         ax.plot(states[:, 0], states[:, 1], color="#0072B2", lw=1.5, label="path")
         ax.plot(*plan.start[:2], "o", color="black", label="start")

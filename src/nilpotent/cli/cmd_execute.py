@@ -1,0 +1,142 @@
+"""``nilpotent execute``: plan, then run the plan on a perturbed robot with re-planning."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated
+
+import typer
+
+from nilpotent.cli.app import (
+    JsonOpt,
+    ModelArg,
+    ParamOpt,
+    app,
+    cli_errors,
+    emit_json,
+    literal,
+    load_model_option,
+    parse_point_option,
+    print_heading,
+    stdout_console,
+    work,
+)
+from nilpotent.cli.plan_options import (
+    ClearanceOpt,
+    FromOpt,
+    LimitOpt,
+    MarginOpt,
+    MaxPieceOpt,
+    SeedOpt,
+    TimeLimitOpt,
+    ToOpt,
+    WorldOpt,
+    plan_from_options,
+)
+from nilpotent.errors import OptionError
+
+MismatchOpt = Annotated[
+    str | None,
+    typer.Option("--mismatch", metavar="P=F,...",
+                 help="True parameters off by fractions: r=0.05,l=-0.05 means r·1.05, l·0.95."),
+]
+NoiseOpt = Annotated[
+    float,
+    typer.Option("--noise", metavar="SIGMA",
+                 help="Standard deviation of the state measurement noise (model units)."),
+]
+ExecTolOpt = Annotated[
+    float,
+    typer.Option("--tol", metavar="T",
+                 help="Correct until the measured distance to the goal is at most T."),
+]
+CorrOpt = Annotated[
+    int, typer.Option("--max-corrections", metavar="N", help="Most re-plans toward the goal.")
+]
+
+
+def parse_mismatch(text: str | None) -> dict[str, float]:
+    """``r=0.05,l=-0.05`` → ``{"r": 0.05, "l": -0.05}`` (values: expressions of the grammar)."""
+    from nilpotent.core.expressions import parse_expression, real_value
+
+    out: dict[str, float] = {}
+    if not text:
+        return out
+    for part in text.split(","):
+        name, eq, value = part.partition("=")
+        name = name.strip()
+        if not (eq and name and value.strip()):
+            raise OptionError(
+                f"--mismatch {text!r}: expected NAME=FRACTION,... e.g. r=0.05,l=-0.05"
+            )
+        where = f"--mismatch {name}"
+        out[name] = real_value(parse_expression(value, {}, where=where), where=where)
+    return out
+
+
+@app.command("execute")
+@cli_errors
+def execute_command(
+    model: ModelArg,
+    to: ToOpt,
+    from_: FromOpt = None,
+    param: ParamOpt = None,
+    world: WorldOpt = None,
+    limit: LimitOpt = None,
+    singular_margin: MarginOpt = 0.0,
+    clearance: ClearanceOpt = 0.0,
+    time_limit: TimeLimitOpt = 60.0,
+    seed: SeedOpt = 0,
+    max_piece: MaxPieceOpt = 1.0,
+    mismatch: MismatchOpt = None,
+    noise: NoiseOpt = 0.0,
+    tol: ExecTolOpt = 1e-3,
+    max_corrections: CorrOpt = 10,
+    json_out: JsonOpt = False,
+) -> None:
+    """Plan MODEL from --from to --to, then execute the plan on a perturbed robot.
+
+    The true robot has its parameters off by --mismatch and its state measured
+    with --noise; after each piece of the plan the rest is re-planned from the
+    measured state, then corrections toward the goal until the measured error
+    is at most --tol.  Reports the closed-loop and the open-loop final errors
+    and every violation of limits, obstacles and singular margin by the true
+    motion (schema nilpotent/execution@1).
+    """
+    from nilpotent.planning.execute import execute_plan
+
+    if not (math.isfinite(noise) and noise >= 0):
+        raise OptionError(f"--noise must be >= 0, got {noise}")
+    if not (math.isfinite(tol) and tol > 0):
+        raise OptionError(f"--tol must be a positive number, got {tol}")
+    if max_corrections < 0:
+        raise OptionError(f"--max-corrections must be >= 0, got {max_corrections}")
+    fractions = parse_mismatch(mismatch)
+    system = load_model_option(model, param)
+    from nilpotent.planning.execute import perturbed_system
+
+    perturbed_system(system, fractions)  # refuse bad names before planning
+    start = parse_point_option(from_, system, option="--from")
+    goal = parse_point_option(to, system, option="--to")
+    with work(f"plan {system.name}"):
+        glob = plan_from_options(system, start, goal, min(1e-8, tol), world, limit,
+                                 singular_margin, time_limit, seed, max_piece,
+                                 clearance=clearance)
+    with work(f"execute on the perturbed {system.name}"):
+        result = execute_plan(glob, fractions, noise, seed, tol, max_corrections, time_limit)
+    if json_out:
+        emit_json(result.to_json())
+        return
+    console = stdout_console()
+    c, o = result.closed_loop, result.open_loop
+    mism = ", ".join(f"{k} {v:+.3g}" for k, v in fractions.items()) or "none"
+    print_heading(console, system.name, f": mismatch {literal(mism)}, noise {noise:g}, seed {seed}")
+    console.print(f"closed loop: error {c.error:.3e} (measured {result.measured_error:.3e}) "
+                  f"after {result.replans} re-plans; violations: "
+                  f"{'; '.join(result.violations) or 'none'}")
+    console.print(f"open loop:   error {o.error:.3e}; violations: "
+                  f"{'; '.join(result.open_loop_violations) or 'none'}")
+    verdict = "reached" if result.reached else "NOT reached"
+    console.print(f"goal {verdict} within {tol:g}")
+
+

@@ -1,0 +1,111 @@
+"""Options and set-up shared by ``nilpotent plan`` and ``nilpotent execute``.
+
+Commands do not import one another: what both need lives here.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from nilpotent.errors import OptionError
+
+FromOpt = Annotated[
+    str | None,
+    typer.Option("--from", metavar="P", help="Start NAME=VALUE,... (default: the origin)."),
+]
+
+ToOpt = Annotated[
+    str,
+    typer.Option("--to", metavar="Q", help="Goal NAME=VALUE,...; unnamed coordinates are 0."),
+]
+
+WorldOpt = Annotated[
+    Path | None,
+    typer.Option("--world", metavar="W.toml",
+                 help="World file: workspace bounds and obstacles (docs/worlds.md)."),
+]
+
+LimitOpt = Annotated[
+    list[str] | None,
+    typer.Option("--limit", metavar="NAME=LO:HI",
+                 help="Limit a coordinate to [LO, HI] (repeatable; adds to or tightens the "
+                      "model's limits)."),
+]
+
+MarginOpt = Annotated[
+    float,
+    typer.Option("--singular-margin", metavar="M",
+                 help="Keep the model's singular margin >= M (trident-snake-joints: |det M|)."),
+]
+
+TimeLimitOpt = Annotated[
+    float,
+    typer.Option("--time-limit", metavar="S",
+                 help="Give up (exit 2, nothing written) when no plan is found within S seconds."),
+]
+
+ClearanceOpt = Annotated[
+    float,
+    typer.Option("--clearance", metavar="D",
+                 help="Keep the robot more than D (model length units) from every obstacle."),
+]
+
+SeedOpt = Annotated[int, typer.Option("--seed", metavar="N", help="Seed of the global planner.")]
+
+MaxPieceOpt = Annotated[
+    float,
+    typer.Option("--max-piece", metavar="D",
+                 help="Longest piece of the global path steered at once (configuration space)."),
+]
+
+
+def parse_limit_options(texts: list[str] | None, system) -> dict[str, tuple[float, float]]:
+    """``--limit NAME=LO:HI`` (repeatable) → ``{name: (lo, hi)}``; LO, HI are expressions."""
+    from nilpotent.core.expressions import parse_expression, real_value
+
+    out: dict[str, tuple[float, float]] = {}
+    for text in texts or []:
+        name, eq, rng = text.partition("=")
+        lo_text, colon, hi_text = rng.partition(":")
+        name = name.strip()
+        if not (eq and colon and name and lo_text.strip() and hi_text.strip()):
+            raise OptionError(f"--limit {text!r}: expected NAME=LO:HI, e.g. phi1=-1.2:1.2")
+        if name not in system.coordinate_names:
+            raise OptionError(
+                f"--limit {text!r}: {name!r} is not a coordinate of {system.name} "
+                f"(coordinates: {', '.join(system.coordinate_names)})"
+            )
+        where = f"--limit {name}"
+        lo, hi = (real_value(parse_expression(t, {}, where=where), where=where)
+                  for t in (lo_text, hi_text))
+        if lo > hi:
+            raise OptionError(f"--limit {text!r}: LO = {lo:g} is above HI = {hi:g}")
+        if name in out:
+            raise OptionError(f"--limit {name} given twice")
+        out[name] = (lo, hi)
+    return out
+
+
+def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
+                      max_piece, *, anchor="auto", max_iterations=30, clearance=0.0):
+    """Load the world, merge the limits and run the global planner (shared with ``execute``)."""
+    from nilpotent.planning.global_planner import plan_global
+    from nilpotent.planning.world import load_world
+
+    if not (math.isfinite(singular_margin) and singular_margin >= 0):
+        raise OptionError(f"--singular-margin must be >= 0, got {singular_margin}")
+    if not (math.isfinite(clearance) and clearance >= 0):
+        raise OptionError(f"--clearance must be >= 0, got {clearance}")
+    if clearance > 0 and world is None:
+        raise OptionError("--clearance needs a --world (there is nothing to keep away from)")
+    limits = system.limits.tightened(parse_limit_options(limit, system))
+    the_world = load_world(world) if world is not None else None
+    return plan_global(
+        system, start, goal, tol, world=the_world, limits=limits,
+        singular_margin=singular_margin, time_limit=time_limit, seed=seed,
+        max_piece=max_piece, anchor=anchor, max_iterations=max_iterations, clearance=clearance,
+    )

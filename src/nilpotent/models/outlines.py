@@ -1,0 +1,128 @@
+r"""Outlines and default joint limits of the built-in robots (for planning among obstacles).
+
+**Trident snake** (all three forms; MATH.md §8).  Body: the equilateral
+triangle of circumradius ``r`` with vertices
+``V_i = (x, y) + r (cos(θ+α_i), sin(θ+α_i))``; legs: the segments
+``V_i → W_i``, ``W_i = V_i + l (cos ψ_i, sin ψ_i)``, ``ψ_i = θ + α_i + φ_i``;
+wheels: the points ``W_i`` (discs of radius 0).  ``α = (0, 2π/3, 4π/3)``
+(``trident-snake``, ``trident-snake-joints``) or ``(−2π/3, 0, 2π/3)``
+(``trident-snake-paper``, whose coordinates are ``x1..x6``).
+
+*Default joint limits: a leg may not enter the body.*  At vertex ``V_i`` the
+two edges of the triangle leave towards the other vertices; the direction
+from ``V_1 = (r, 0)`` to ``V_2 = r(−1/2, √3/2)`` is ``(−3/2, √3/2)``, at angle
+``5π/6`` from the outward radius ``(1, 0)`` (and ``−5π/6`` towards ``V_3``).  So
+the interior angle of the body at a vertex (``π/3``) is the cone of leg
+directions ``|φ_i| > 5π/6`` (mod ``2π``), and a leg stays outside the body
+(touching an edge at most) iff ``φ_i ∈ [−5π/6, 5π/6]``.  These are the default
+``[limits]`` of the three forms; they also keep a joint from turning through
+the body (the joint coordinate is not wrapped).  Legs may still cross one
+another (self-collision of legs is not checked).
+
+**Car with trailers** (``car-trailers:K``, coordinates ``x, y, θ0..θK``,
+hitch lengths ``d_i``).  Axle centres ``P_0 = (x, y)``,
+``P_i = P_{i−1} − d_i (cos θ_i, sin θ_i)``.  The car is the rectangle from
+0.1 behind to 0.7 ahead of ``P_0`` along ``θ0``, 0.5 wide; trailer ``i`` the
+rectangle from 0.2 behind to 0.3 ahead of ``P_i`` along ``θ_i``, 0.4 wide
+(model length units, independent of ``d_i``); each hitch is the segment
+``P_i → P_{i−1}``.  No joint limits by default (relative angles are not
+coordinates; add ``--limit`` on any ``θ_i`` if needed).
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+from nilpotent.core.outline import Limits, Outline
+from nilpotent.core.system import ControlSystem
+
+__all__ = [
+    "CAR_SIZE",
+    "LEG_LIMIT",
+    "TRAILER_SIZE",
+    "car_trailers_outline",
+    "trident_outline",
+    "with_builtin_constraints",
+]
+
+#: The bound of the trident snake's default joint limits ``|φ_i| ≤ 5π/6`` (see module doc).
+LEG_LIMIT = 5 * sp.pi / 6
+#: Car rectangle: (behind the axle, ahead of the axle, width).
+CAR_SIZE = (sp.Rational(1, 10), sp.Rational(7, 10), sp.Rational(1, 2))
+#: Trailer rectangle: (behind the axle, ahead of the axle, width).
+TRAILER_SIZE = (sp.Rational(1, 5), sp.Rational(3, 10), sp.Rational(2, 5))
+
+_TRIDENT_ANGLES = {
+    "body": (sp.Integer(0), 2 * sp.pi / 3, 4 * sp.pi / 3),
+    "paper": (-2 * sp.pi / 3, sp.Integer(0), 2 * sp.pi / 3),
+}
+
+
+def trident_outline(
+    coords: tuple[sp.Symbol, ...], offsets: tuple[sp.Expr, ...], has_lengths: bool = True
+) -> Outline:
+    """Body triangle, three legs and three wheels of the trident snake (module doc).
+
+    ``has_lengths``: the model has the parameters ``r`` and ``l``; else
+    (``trident-snake-paper``) ``r = l = 1``.
+    """
+    x, y, th, *phis = coords
+    r, l = (sp.Symbol("r"), sp.Symbol("l")) if has_lengths else (sp.Integer(1), sp.Integer(1))
+    verts = [(x + r * sp.cos(th + a), y + r * sp.sin(th + a)) for a in offsets]
+    wheels = [
+        (vx + l * sp.cos(th + a + p), vy + l * sp.sin(th + a + p))
+        for (vx, vy), a, p in zip(verts, offsets, phis, strict=True)
+    ]
+    return Outline(
+        polygons=(tuple(verts),),
+        segments=tuple(zip(verts, wheels, strict=True)),
+        discs=tuple((w, sp.Integer(0)) for w in wheels),
+    )
+
+
+def _rectangle(px, py, th, behind, ahead, width) -> tuple:
+    c, s = sp.cos(th), sp.sin(th)
+    h = width / 2
+    return tuple(
+        (px + a * c - b * s, py + a * s + b * c)
+        for a, b in ((-behind, -h), (ahead, -h), (ahead, h), (-behind, h))
+    )
+
+
+def car_trailers_outline(coords: tuple[sp.Symbol, ...]) -> Outline:
+    """Car and trailer rectangles and hitch bars of ``car-trailers:K`` (module doc)."""
+    x, y, *thetas = coords
+    axles = [(x, y)]
+    for i in range(1, len(thetas)):
+        d = sp.Symbol(f"d{i}")
+        px, py = axles[-1]
+        axles.append((px - d * sp.cos(thetas[i]), py - d * sp.sin(thetas[i])))
+    polys = [_rectangle(x, y, thetas[0], *CAR_SIZE)]
+    polys += [_rectangle(px, py, th, *TRAILER_SIZE)
+              for (px, py), th in zip(axles[1:], thetas[1:], strict=True)]
+    hitches = tuple((axles[i], axles[i - 1]) for i in range(1, len(axles)))
+    return Outline(polygons=tuple(polys), segments=hitches)
+
+
+def with_builtin_constraints(system: ControlSystem) -> ControlSystem:
+    """The built-in ``system`` with its outline and default limits attached (if it has any).
+
+    Trident forms (by name): :func:`trident_outline` and ``|φ_i| ≤ 5π/6``;
+    ``car-trailers:K``: :func:`car_trailers_outline`.  Other systems are
+    returned unchanged.
+    """
+    from dataclasses import replace
+
+    name = system.name
+    coords = system.coordinates
+    if name in ("trident-snake", "trident-snake-joints", "trident-snake-paper"):
+        key = "paper" if name == "trident-snake-paper" else "body"
+        bound = float(LEG_LIMIT)
+        limits = Limits(tuple((str(c), -bound, bound) for c in coords[3:6]))
+        return replace(
+            system, limits=limits, geometry=trident_outline(
+            coords, _TRIDENT_ANGLES[key], "r" in system.parameter_values
+        ))
+    if name.startswith("car-trailers:"):
+        return replace(system, geometry=car_trailers_outline(coords))
+    return system

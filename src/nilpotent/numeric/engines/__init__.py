@@ -1,0 +1,223 @@
+r"""Integration engines: one registry of classes, one written contract.
+
+Every engine integrates a batch of ``B`` trajectories of
+
+.. math::
+
+    \dot x = \sum_{i=1}^m u_i(t)\, X_i(x), \qquad x(0) = x_0^{(b)},
+
+under ``B`` controls given as data (:class:`~nilpotent.numeric.signals.Signal`:
+piecewise sums of sinusoids, time restarting in every segment).  The registry
+:data:`ENGINES` maps a name to an instance; :func:`choose_engine` decides what
+``engine="auto"`` means; :func:`nilpotent.numeric.integrate.integrate` is the
+entry point users call.
+
+==========  ====================  ===========================================================
+name        methods               what runs
+==========  ====================  ===========================================================
+``numba``   adaptive, fixed       DOP853 kernels compiled into the system's cached module
+                                  (:mod:`nilpotent.numeric.kernels`), ``prange`` over the batch
+``numpy``   fixed                 the same fixed-step DOP853 vectorised over the batch
+``scipy``   adaptive              :func:`scipy.integrate.solve_ivp` (DOP853) per trajectory:
+                                  the reference; also takes inputs as Python functions
+``heyoka``  adaptive              heyoka's Taylor method in SIMD batches (fastest measured)
+==========  ====================  ===========================================================
+
+Writing an engine (the contract; scipy's ``OdeSolver`` docstring is the model)
+------------------------------------------------------------------------------
+Subclass :class:`Engine`, set the class attributes and implement
+:meth:`Engine.solve`, then add an instance to :data:`ENGINES`.
+
+Class attributes
+    ``name`` (the registry key), ``methods`` (the subset of
+    :data:`~nilpotent.numeric.integrate.METHODS` it runs: ``"adaptive"``
+    and/or ``"fixed"``), ``summary`` (one line for docs and messages).
+
+``available()``
+    Whether its dependencies import; an engine that is asked for but not
+    available raises :class:`~nilpotent.errors.MissingExtraError` naming the install.
+
+``solve(system, xs, signal, times, *, adaptive, steps, rtol, atol, max_steps,
+min_step, bound, threads)``
+    Inputs, all already validated by ``integrate``: ``system`` a
+    :class:`~nilpotent.numeric.compile.CompiledSystem` with ``n`` coordinates
+    and ``m`` fields; ``xs`` ``(B, n)`` C-contiguous float64 start states;
+    ``signal`` a batch of exactly ``B`` controls with ``m`` inputs;
+    ``times`` ``(T,)`` sorted global sample times within every control's
+    duration; ``adaptive`` selects the method (``steps`` per segment for the
+    fixed one); ``rtol``, ``atol``, ``max_steps`` (accepted + rejected),
+    ``min_step`` and ``bound`` as in ``integrate``; ``threads`` a hint
+    (``None``: the engine's default).
+
+    Returns ``(final, samples, info)``: ``final`` ``(B, n)`` the state at the
+    end of each control (the last state reached if stopped early);
+    ``samples`` ``(B, T, n)`` the states at ``times``, NaN past an early stop;
+    ``info`` ``(B, 4)`` float: :class:`Status` code, accepted steps, rejected
+    steps, and an error estimate (NaN where the engine has none).
+
+    Obligations: integrate every segment from its start, restarting the step
+    control at segment boundaries (the inputs may jump there); stop a
+    trajectory, never raise, when some ``|x_k| > bound``
+    (:attr:`Status.BLOW_UP`), when the state is not finite
+    (:attr:`Status.NON_FINITE`), after ``max_steps`` (:attr:`Status.MAX_STEPS`)
+    or below ``min_step`` (:attr:`Status.STEP_TOO_SMALL`); meet the accuracy
+    the method promises (``adaptive``: every accepted step has local error
+    ≤ ``atol + rtol·|x|``); leave its inputs unchanged.  Raise only for a
+    missing dependency or inputs outside what the engine can do
+    (:class:`~nilpotent.errors.OptionError`, saying what to use instead).
+"""
+
+from __future__ import annotations
+
+import abc
+from enum import IntEnum
+from typing import Any, ClassVar
+
+import numpy as np
+
+from nilpotent.errors import MissingExtraError, OptionError
+
+__all__ = [
+    "AUTO_NUMBA_BATCH", "ENGINES", "Engine", "EngineOutput", "Status", "check_times",
+    "choose_engine", "engine_names", "state_status",
+]
+
+#: ``engine="auto"`` compiles numba kernels from this batch size on (below it
+#: only when they are already cached) and prefers heyoka from it on.
+AUTO_NUMBA_BATCH = 64
+
+#: ``(final (B, n), samples (B, T, n), info (B, 4))``: what :meth:`Engine.solve` returns.
+EngineOutput = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+class Status(IntEnum):
+    """Outcome of one trajectory (the members' :attr:`message` is what users read)."""
+
+    SUCCESS = 0
+    MAX_STEPS = 1
+    STEP_TOO_SMALL = 2
+    BLOW_UP = 3
+    NON_FINITE = 4
+
+    @property
+    def message(self) -> str:
+        return {
+            0: "integrated to the end",
+            1: "stopped: too many steps (max_steps)",
+            2: "stopped: step size below min_step",
+            3: "stopped: the state left the bound |x_k| <= bound (blow-up)",
+            4: "stopped: the state is not finite",
+        }[int(self)]
+
+
+class Engine(abc.ABC):
+    """Base class of the integration engines (the contract is the module docstring)."""
+
+    name: ClassVar[str]
+    methods: ClassVar[tuple[str, ...]]
+    summary: ClassVar[str]
+    install: ClassVar[str] = ""
+
+    def available(self) -> bool:
+        """Whether the engine's dependencies can be imported."""
+        return True
+
+    def cached(self, system: Any) -> bool:
+        """Whether running ``system`` needs no compilation first (``"auto"`` prefers such)."""
+        del system
+        return True
+
+    def require(self) -> None:
+        """Raise :class:`MissingExtraError` (naming the install) if not :meth:`available`."""
+        if not self.available():
+            raise MissingExtraError(f"the {self.name} engine needs {self.install}")
+
+    @abc.abstractmethod
+    def solve(
+        self,
+        system: Any,
+        xs: np.ndarray,
+        signal: Any,
+        times: np.ndarray,
+        *,
+        adaptive: bool,
+        steps: int,
+        rtol: float,
+        atol: float,
+        max_steps: int,
+        min_step: float,
+        bound: float,
+        threads: int | None,
+    ) -> EngineOutput:
+        """Integrate the batch (module docstring: inputs, outputs, obligations)."""
+
+    def __repr__(self) -> str:
+        return f"<engine {self.name}: {self.summary}>"
+
+
+def check_times(times: Any, total: np.ndarray) -> np.ndarray:
+    """``times`` as a sorted ``(T,)`` float array within ``[0, min(total)]``; ``None``: none."""
+    if times is None:
+        return np.zeros(0)
+    ts = np.ascontiguousarray(np.asarray(times, dtype=np.float64).ravel())
+    if ts.size and (not np.all(np.isfinite(ts)) or np.any(np.diff(ts) < 0)):
+        raise OptionError("sample times must be finite and sorted")
+    if ts.size and (ts[0] < 0 or ts[-1] > float(np.min(total)) * (1 + 1e-12)):
+        raise OptionError(
+            f"sample times must lie in [0, {float(np.min(total))}] (the input's duration)"
+        )
+    return ts
+
+
+def state_status(x: np.ndarray, bound: float) -> np.ndarray:
+    """``(B,)`` status codes of states ``(B, n)``: non-finite, beyond ``bound``, or 0."""
+    finite = np.all(np.isfinite(x), axis=1)
+    big = np.any(np.abs(np.where(np.isfinite(x), x, 0.0)) > bound, axis=1)
+    return np.where(~finite, int(Status.NON_FINITE), np.where(big, int(Status.BLOW_UP), 0))
+
+
+def _registry() -> dict[str, Engine]:
+    from nilpotent.numeric.engines.heyoka_engine import HeyokaEngine
+    from nilpotent.numeric.engines.numba_engine import NumbaEngine
+    from nilpotent.numeric.engines.numpy_engine import NumpyEngine
+    from nilpotent.numeric.engines.scipy_engine import ScipyEngine
+
+    return {e.name: e for e in (NumbaEngine(), NumpyEngine(), ScipyEngine(), HeyokaEngine())}
+
+
+#: The engines by name (``"auto"`` is not one: :func:`choose_engine` resolves it).
+ENGINES: dict[str, Engine] = _registry()
+
+
+def engine_names() -> tuple[str, ...]:
+    """``("auto", *ENGINES)``: every value ``engine=`` accepts."""
+    return ("auto", *ENGINES)
+
+
+def choose_engine(system: Any, method: str, engine: str, batch: int) -> Engine:
+    """The engine that ``engine`` (a name or ``"auto"``) means for ``method`` and ``batch``.
+
+    ``"auto"``: for the adaptive method, ``heyoka`` when the batch has at least
+    :data:`AUTO_NUMBA_BATCH` trajectories and heyoka is installed; otherwise
+    ``numba`` when its kernels for ``system`` are already in the on-disk cache
+    or the batch is that large, else ``scipy`` (adaptive) / ``numpy`` (fixed).
+
+    Raises
+    ------
+    OptionError
+        An unknown name, or an engine that does not run ``method``.
+    """
+    if engine == "auto":
+        numba = ENGINES["numba"]
+        if method == "adaptive" and batch >= AUTO_NUMBA_BATCH and ENGINES["heyoka"].available():
+            return ENGINES["heyoka"]
+        if numba.available() and (batch >= AUTO_NUMBA_BATCH or numba.cached(system)):
+            return numba
+        return ENGINES["scipy" if method == "adaptive" else "numpy"]
+    if engine not in ENGINES:
+        raise OptionError(f"unknown engine {engine!r} (choose from {', '.join(engine_names())})")
+    chosen = ENGINES[engine]
+    if method not in chosen.methods:
+        runs = ", ".join(e.name for e in ENGINES.values() if method in e.methods)
+        raise OptionError(f"method {method!r} runs on the engines {runs}, not {engine!r}")
+    return chosen

@@ -1,0 +1,250 @@
+"""Batched integration of ``dx/dt = Σ_i u_i(t) X_i(x)``: :func:`integrate` → :class:`BatchSolution`.
+
+Methods (registry :data:`METHODS`) run on the engines of
+:mod:`nilpotent.numeric.engines` (registry ``ENGINES``, the engine contract
+written there):
+
+============  ==========================  =====================================
+method        engines                     accuracy reported (``tolerance``)
+============  ==========================  =====================================
+``adaptive``  ``numba``, ``scipy``,       ``rtol``: every accepted step had its
+              ``heyoka``                  local error ≤ ``atol + rtol·|x|``
+``fixed``     ``numba``, ``numpy``        step-halving (Richardson) estimate of
+                                          the global error, max over the batch
+============  ==========================  =====================================
+
+``engine="auto"`` (:func:`~nilpotent.numeric.engines.choose_engine`): for the
+adaptive method, ``heyoka`` when the batch has at least
+:data:`~nilpotent.numeric.engines.AUTO_NUMBA_BATCH` trajectories (and heyoka is
+installed, as it is by default); otherwise ``numba`` when its kernels are
+already in the on-disk cache or the batch is that large, else ``scipy``
+(adaptive) / ``numpy`` (fixed).
+
+Every trajectory gets a :class:`Status`; blow-up (``|x_k| > bound``), a step
+below ``min_step`` and ``max_steps`` end that trajectory and are reported,
+never raised (:meth:`BatchSolution.raise_for_status` raises when wanted).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from nilpotent.errors import IntegrationError, OptionError
+from nilpotent.numeric.compile import CompiledSystem
+from nilpotent.numeric.engines import ENGINES as ENGINES
+from nilpotent.numeric.engines import Status as Status
+from nilpotent.numeric.engines import check_times, choose_engine, engine_names
+from nilpotent.numeric.engines.numba_engine import kernels_cached as kernels_cached
+from nilpotent.numeric.engines.scipy_engine import solve_function_input as solve_function_input
+from nilpotent.numeric.signals import Signal
+from nilpotent.numeric.tableaux import DOP853
+from nilpotent.numeric.types import PerTrajectory, Samples, States, Times
+
+METHODS: dict[str, str] = {
+    "adaptive": "DOP853 with embedded error control (scipy's step-size rules)",
+    "fixed": "DOP853 with equal steps per segment; error estimated by step halving",
+}
+def _ro(a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class BatchSolution:
+    """Result of :func:`integrate` over a batch of ``B`` trajectories.
+
+    Attributes
+    ----------
+    method, engine:
+        What integrated it.
+    x0:
+        ``(B, n)`` initial states.
+    final:
+        ``(B, n)`` states at the end (the last state reached if stopped early).
+    times:
+        ``(T,)`` sample times (global time, from 0).
+    samples:
+        ``(B, T, n)`` states at ``times`` (NaN past an early stop).
+    status:
+        ``(B,)`` :class:`Status` codes.
+    steps, rejected:
+        ``(B,)`` accepted and rejected steps.
+    error_estimate:
+        ``(B,)`` estimated global error (max norm): for ``fixed`` the step-halving
+        estimate ``max|x_N − x_{N/2}| / (2^8 − 1)`` over the end point and the
+        samples; for ``adaptive`` (numba) the sum of the accepted local error
+        estimates (a heuristic, no propagation); NaN where not available.
+    tolerance:
+        The accuracy this result met: ``rtol`` for ``adaptive`` (per step, see
+        the module docstring), the largest ``error_estimate`` of the successful
+        trajectories for ``fixed``.
+    rtol, atol, steps_per_segment:
+        The accuracy parameters used.
+    """
+
+    method: str
+    engine: str
+    x0: States
+    final: States
+    times: Times
+    samples: Samples
+    status: PerTrajectory
+    steps: PerTrajectory
+    rejected: PerTrajectory
+    error_estimate: PerTrajectory
+    tolerance: float
+    rtol: float
+    atol: float
+    steps_per_segment: int
+
+    @property
+    def ok(self) -> np.ndarray:
+        """``(B,)`` True where the trajectory reached the end."""
+        return self.status == Status.SUCCESS
+
+    @property
+    def all_ok(self) -> bool:
+        return bool(np.all(self.ok))
+
+    def raise_for_status(self) -> None:
+        """Raise :class:`IntegrationError` if some trajectory did not reach the end."""
+        bad = np.flatnonzero(~self.ok)
+        if bad.size:
+            first = int(bad[0])
+            raise IntegrationError(
+                f"{bad.size} of {self.status.size} trajectories failed; trajectory {first}: "
+                f"{Status(int(self.status[first])).message}"
+            )
+
+
+# --- entry point ---------------------------------------------------------------
+def integrate(
+    system: CompiledSystem,
+    x0: Any,
+    inputs: Signal,
+    *,
+    method: str = "adaptive",
+    engine: str = "auto",
+    times: Sequence[float] | np.ndarray | None = None,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    steps: int = 64,
+    max_steps: int = 100_000,
+    min_step: float | None = None,
+    bound: float = 1e8,
+    estimate_error: bool = True,
+    threads: int | None = None,
+) -> BatchSolution:
+    """Integrate ``dx/dt = Σ_i u_i(t) X_i(x)`` for a batch of states and inputs.
+
+    Parameters
+    ----------
+    system:
+        The compiled fields (:func:`~nilpotent.numeric.compile.compile_fields`).
+    x0:
+        ``(B, n)`` initial states (or ``(n,)`` for one).
+    inputs:
+        A batch of ``B`` input signals, or of 1 shared by all states.
+    method:
+        ``"adaptive"`` or ``"fixed"`` (:data:`METHODS`).
+    engine:
+        One of :data:`ENGINES` (see the module docstring).
+    times:
+        Sample times in ``[0, duration]`` (shared by the batch; sorted).
+    rtol, atol:
+        Tolerances of the adaptive method.
+    steps:
+        Steps per segment of the fixed method (even, ≥ 2).
+    max_steps:
+        Most steps (accepted + rejected) per trajectory.
+    min_step:
+        Smallest step of the adaptive method (default ``1e-13 ×`` duration);
+        numba only (scipy and heyoka have none).
+    bound:
+        A trajectory with some ``|x_k| > bound`` is stopped (:attr:`Status.BLOW_UP`).
+    estimate_error:
+        For ``fixed``: also integrate with ``steps/2`` to estimate the error.
+    threads:
+        Number of numba threads (default: numba's setting), or of threads
+        running heyoka's SIMD batches (default 1).
+
+    Raises
+    ------
+    OptionError
+        An unknown ``method`` or ``engine``, initial states whose shape is not
+        ``(B, n)``, inputs for another number of fields or batch size, or bad
+        tolerances, steps or bounds.
+    MissingExtraError
+        The engine asked for is not installed.
+    """
+    if method not in METHODS:
+        raise OptionError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
+    if engine not in engine_names():
+        raise OptionError(
+            f"unknown engine {engine!r} (choose from {', '.join(engine_names())})"
+        )
+    xs = np.ascontiguousarray(np.atleast_2d(np.asarray(x0, dtype=np.float64)))
+    if xs.ndim != 2 or xs.shape[1] != system.n:
+        raise OptionError(f"initial states must have shape (B, {system.n}), got {np.shape(x0)}")
+    if inputs.m != system.m:
+        raise OptionError(f"inputs have {inputs.m} components, the system has {system.m} fields")
+    batch = xs.shape[0]
+    sig = inputs.broadcast(batch)
+    total = sig.total_durations
+    ts = check_times(times, total)
+    if not (rtol > 0 and atol >= 0 and math.isfinite(rtol) and math.isfinite(atol)):
+        raise OptionError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
+    if method == "fixed" and (int(steps) != steps or steps < 2 or (estimate_error and steps % 2)):
+        raise OptionError(f"steps must be an even integer >= 2, got {steps}")
+    if max_steps < 1 or not bound > 0:
+        raise OptionError("max_steps must be >= 1 and bound > 0")
+    if min_step is None:
+        min_step = 1e-13 * float(np.max(total))
+    chosen = choose_engine(system, method, engine, batch)
+    chosen.require()
+    adaptive = method == "adaptive"
+
+    def run(step_count: int, adaptive_steps: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return chosen.solve(system, xs, sig, ts, adaptive=adaptive_steps, steps=step_count,
+                            rtol=float(rtol), atol=float(atol), max_steps=int(max_steps),
+                            min_step=float(min_step), bound=float(bound), threads=threads)
+
+    final, samples, info = run(int(steps), adaptive)
+    status = info[:, 0].astype(np.int64)
+    err = info[:, 3].copy() if chosen.name == "numba" and adaptive else np.full(batch, np.nan)
+    if adaptive:
+        tolerance = float(rtol)
+    elif estimate_error:
+        half = int(steps) // 2
+        f2, s2, _ = run(half, False)
+        diff = np.abs(final - f2).max(axis=1)
+        if ts.size:
+            diff = np.maximum(diff, np.nan_to_num(np.abs(samples - s2), nan=np.inf).max(
+                axis=(1, 2)))
+        err = diff / (2.0**DOP853.order - 1.0)
+        good = err[status == 0]
+        tolerance = float(good.max()) if good.size else float("nan")
+    else:
+        tolerance = float("nan")
+    return BatchSolution(
+        method=method,
+        engine=chosen.name,
+        x0=_ro(xs),
+        final=_ro(final),
+        times=_ro(ts),
+        samples=_ro(samples),
+        status=_ro(info[:, 0].astype(np.int64)),
+        steps=_ro(info[:, 1].astype(np.int64)),
+        rejected=_ro(info[:, 2].astype(np.int64)),
+        error_estimate=_ro(err),
+        tolerance=tolerance,
+        rtol=float(rtol),
+        atol=float(atol),
+        steps_per_segment=int(steps) if method == "fixed" else 0,
+    )

@@ -1,0 +1,517 @@
+"""Global planning among obstacles and limits: OMPL path, nilpotent steering, subdivision.
+
+The classical approximation of a holonomic path (Laumond, Sekhavat, Lamiraux,
+"Guidelines in nonholonomic motion planning for mobile robots", 1998; Laumond
+et al. 1994):
+
+1. a collision-free path in configuration space, ignoring the nonholonomic
+   constraints, from OMPL's RRTConnect (``ompl.geometric``) with a validity
+   checker for the limits, the world (robot outline vs obstacles, shapely)
+   and the singular margin (:class:`~nilpotent.planning.verify.Checker`),
+   simplified, then cut into pieces no longer than ``max_piece``;
+2. each piece is steered from the state actually reached to its end
+   waypoint by the iterated nilpotent steering
+   (:func:`nilpotent.planning.iterative.plan`); the steered motion is
+   re-simulated and checked at dense samples;
+3. a piece whose steered motion leaves the free space or the limits (or that
+   cannot be steered) is halved (its chord's midpoint becomes a waypoint) and
+   retried; intermediate waypoints are reached within
+   ``min(MID_TOL, MID_TOL_FRACTION · piece length)``, and when the state reached
+   is further than that from the chord, it is first steered back onto the
+   chord's start.  The nilpotent motions shrink with the distance (homogeneity:
+   a displacement ``ε`` in a weight-``w`` direction costs motions of size
+   ``ε^{1/w}``), so the steered motion of a short enough piece stays in any
+   open tube around the chord and subdivision terminates on paths with
+   positive clearance.
+
+Before that, a **direct** attempt: when the goal is within ``DIRECT_RADIUS``
+and the straight chord from start to goal is admissible, the single nilpotent
+plan of ``plan()`` (the old behaviour of ``nilpotent plan``) is kept if its
+motion is admissible; this keeps earlier results unchanged for small problems.
+Every returned plan is re-simulated as a whole
+(:func:`~nilpotent.planning.verify.verify_segments`, 100 samples per segment)
+and refused unless admissible and within ``tol`` of the goal.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from nilpotent.core.outline import Limits
+from nilpotent.core.system import ControlSystem
+from nilpotent.errors import IntegrationError, PlanningError, SingularPointError
+from nilpotent.planning.controls import Segment
+from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
+from nilpotent.planning.verify import Checker, Verification, verify_segments
+from nilpotent.planning.world import World
+from nilpotent.strict_json import json_safe
+
+__all__ = ["GlobalPlan", "Piece", "ompl_path", "plan_global", "plan_json", "steer_admissible"]
+
+#: Largest tolerance at intermediate waypoints (the next piece starts from the state reached).
+MID_TOL = 0.05
+#: ... and at most this fraction of the piece's length (so that halving converges).
+MID_TOL_FRACTION = 0.1
+#: Clearance the global (holonomic) path keeps beyond the required one (model length units),
+#: except within ``PATH_END_ZONE`` of the start and the goal: room for the steered motions.
+PATH_CLEARANCE = 0.2
+PATH_END_ZONE = 1.0
+#: Default longest piece (Euclidean in configuration space) before steering.
+MAX_PIECE = 1.0
+#: Pieces are not halved below this length: then planning fails.
+MIN_PIECE = 1e-3
+#: Samples per segment when a piece's motion is checked, and when the whole plan is verified.
+CHECK_POINTS = 40
+VERIFY_POINTS = 100
+#: The direct attempt (one nilpotent plan, the old behaviour) is made for goals this close
+#: (configuration-space Euclidean distance).
+DIRECT_RADIUS = 2.0
+
+
+@dataclass(frozen=True)
+class Piece:
+    """One steered piece: its end waypoint, the segments it added, its error, its iterations."""
+
+    target: tuple[float, ...]
+    first_segment: int
+    segments: int
+    error: float
+    iterations: int
+    halvings: int
+
+
+@dataclass(frozen=True, eq=False)
+class GlobalPlan:
+    """A plan among limits and obstacles, verified by dense re-simulation.
+
+    Attributes
+    ----------
+    plan:
+        The whole plan as a :class:`~nilpotent.planning.iterative.Plan`
+        (segments in order from the start; ``trajectory`` the dense
+        re-simulation; ``iterations`` those of all pieces, each measuring the
+        distance to its own piece's end).
+    world, limits, singular_margin:
+        What the plan respects.
+    waypoints:
+        The configuration-space path (start, the global path's vertices and the
+        midpoints inserted by subdivision, goal).
+    pieces:
+        The steered pieces.
+    verification:
+        The dense re-simulation: clearance, limit margin, singular margin, error.
+    route:
+        ``"direct"`` (one nilpotent plan, no global path needed) or ``"global"``.
+    planner_seconds:
+        Time spent in OMPL.
+    """
+
+    plan: Plan
+    world: World | None
+    limits: Limits
+    singular_margin: float
+    waypoints: tuple[tuple[float, ...], ...]
+    pieces: tuple[Piece, ...]
+    verification: Verification
+    route: str
+    planner_seconds: float = 0.0
+    time_limit: float = math.inf
+    seconds: float = field(default=0.0)
+    clearance_required: float = 0.0
+
+    @property
+    def error(self) -> float:
+        return self.verification.error
+
+    def to_json(self) -> dict[str, Any]:
+        """``nilpotent/plan@1`` (INTERFACE.md) with ``world``, ``limits``, ``waypoints``,
+        ``clearance``, ``limits_ok``, ``min_singular_margin`` and more; no NaN/Infinity
+        (undefined numbers are null, ``null_reasons`` says why)."""
+        v = self.verification
+        out = self.plan.to_json()
+        reasons: dict[str, str] = {}
+        if v.clearance is None:
+            reasons["clearance"] = "no world given: no obstacles to measure against"
+        if v.min_singular_margin is None:
+            reasons["min_singular_margin"] = (
+                f"model {self.plan.system.name} defines no singular margin"
+            )
+        out.update({
+            "reached": list(v.reached),
+            "error": v.error,
+            "converged": bool(v.error <= self.plan.tol),
+            "world": None if self.world is None else self.world.name,
+            "limits": {k: [lo, hi] for k, (lo, hi) in self.limits.as_dict().items()},
+            "waypoints": [list(w) for w in self.waypoints],
+            "clearance": v.clearance,
+            "limits_ok": v.limits_ok,
+            "limit_margin": v.limit_margin,
+            "min_singular_margin": v.min_singular_margin,
+            "singular_margin": self.singular_margin,
+            "clearance_required": self.clearance_required,
+            "route": self.route,
+            "planner_seconds": self.planner_seconds,
+            "seconds": self.seconds,
+            "pieces": [
+                {"target": list(p.target), "first_segment": p.first_segment,
+                 "segments": p.segments, "error": p.error, "iterations": p.iterations,
+                 "halvings": p.halvings}
+                for p in self.pieces
+            ],
+        })
+        if self.world is not None:
+            out["world_definition"] = self.world.to_json()
+        return plan_json(out, reasons)
+
+
+def plan_json(out: dict[str, Any], reasons: dict[str, str] | None = None) -> dict[str, Any]:
+    """``out`` made strict JSON (:func:`nilpotent.strict_json.json_safe`: non-finite
+    numbers become ``null``, listed under ``undefined``), with ``null_reasons`` saying why
+    the fields in ``reasons`` are ``null``."""
+    undefined: list[str] = []
+    clean = json_safe(out, undefined=undefined)
+    if undefined:
+        clean["undefined"] = {
+            "paths": undefined,
+            "why": "not finite numbers (NaN or infinity), hence null; e.g. Newton refinement "
+                   "steps compute no homogeneous distance",
+        }
+    if reasons:
+        clean["null_reasons"] = dict(reasons)
+    return clean
+
+
+def _box(
+    checker: Checker, x0: np.ndarray, xg: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The configuration-space box OMPL samples in (limits, world bounds, else around the chord)."""
+    names = checker.system.coordinate_names
+    lo = np.minimum(x0, xg)
+    hi = np.maximum(x0, xg)
+    pad = np.maximum(math.pi, 0.5 * float(np.linalg.norm(xg - x0)))
+    lo, hi = lo - pad, hi + pad
+    world = checker.world
+    if world is not None and world.bounds is not None:
+        for axis, name in enumerate(("x", "y")):
+            if name in names:
+                j = names.index(name)
+                lo[j], hi[j] = world.bounds[axis]
+    assert checker.limits is not None
+    for name, a, b in checker.limits.bounds:
+        j = names.index(name)
+        lo[j], hi[j] = a, b
+    return lo, hi
+
+
+def ompl_path(
+    checker: Checker,
+    x0: np.ndarray,
+    xg: np.ndarray,
+    seconds: float,
+    seed: int | None = None,
+    resolution: float = 0.05,
+    valid: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> list[np.ndarray]:
+    """A collision-free configuration-space path from OMPL RRTConnect, simplified.
+
+    ``resolution``: largest step (configuration-space units) at which OMPL checks
+    straight motions between states.  ``valid``: the validity of a batch of
+    configurations (default ``checker.valid``; ``checker`` also gives the box).
+
+    Raises
+    ------
+    PlanningError
+        No exact solution within ``seconds``.
+    """
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    if seed is not None:
+        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
+    n = len(x0)
+    lo, hi = _box(checker, x0, xg)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for j in range(n):
+        bounds.setLow(j, float(lo[j]))
+        bounds.setHigh(j, float(hi[j]))
+    space.setBounds(bounds)
+    setup = og.SimpleSetup(space)
+
+    is_valid = checker.valid if valid is None else valid
+
+    def state_valid(state: Any) -> bool:
+        q = np.array([state[j] for j in range(n)])
+        return bool(is_valid(q[None, :])[0])
+
+    setup.setStateValidityChecker(state_valid)
+    extent = float(np.linalg.norm(hi - lo))
+    setup.getSpaceInformation().setStateValidityCheckingResolution(
+        min(0.05, resolution / max(extent, 1e-12))
+    )
+    start, goal = space.allocState(), space.allocState()
+    for j in range(n):
+        start[j], goal[j] = float(x0[j]), float(xg[j])
+    setup.setStartAndGoalStates(start, goal)
+    setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
+    status = setup.solve(float(seconds))
+    if not (status and setup.haveExactSolutionPath()):
+        raise PlanningError(
+            f"no collision-free path from OMPL RRTConnect within {seconds:.3g} s "
+            f"(status: {status.asString() if hasattr(status, 'asString') else status}); "
+            "raise --time-limit, or check that start and goal are connected in the free space"
+        )
+    setup.simplifySolution()
+    path = setup.getSolutionPath()
+    pts = [np.array([path.getState(i)[j] for j in range(n)]) for i in range(path.getStateCount())]
+    pts[0], pts[-1] = x0.copy(), xg.copy()
+    return pts
+
+
+def _densify(points: Sequence[np.ndarray], max_piece: float) -> list[np.ndarray]:
+    out = [points[0]]
+    for a, b in itertools.pairwise(points):
+        k = max(1, math.ceil(float(np.linalg.norm(b - a)) / max_piece))
+        out += [a + (b - a) * (i / k) for i in range(1, k)] + [b.copy()]
+    return out
+
+
+def _chord_valid(
+    valid: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray, step: float = 0.01
+) -> bool:
+    k = max(2, math.ceil(float(np.linalg.norm(b - a)) / step) + 1)
+    t = np.linspace(0.0, 1.0, k)[:, None]
+    return bool(np.all(valid(a + t * (b - a))))
+
+
+def _roomy(
+    checker: Checker, x0: np.ndarray, xg: np.ndarray, extra: float, near: float
+) -> Callable[[np.ndarray], np.ndarray]:
+    """Validity with ``extra`` clearance, except within ``near`` of the start or the goal
+    (configuration space), where the plain validity suffices."""
+
+    def valid(q: np.ndarray) -> np.ndarray:
+        q = np.atleast_2d(q)
+        ok = checker.valid(q)
+        far = ok & (np.linalg.norm(q - x0, axis=1) > near) & (np.linalg.norm(q - xg, axis=1) > near)
+        if far.any():
+            ok[far] = checker.valid(q[far], extra_clearance=extra)
+        return ok
+
+    return valid
+
+
+def steer_admissible(
+    system: ControlSystem, checker: Checker, x: np.ndarray, w: np.ndarray, tol: float,
+    options: dict[str, Any],
+    endpoints_singular_raise: bool = False,
+) -> Plan | None:
+    """The nilpotent plan from ``x`` to ``w`` if its densely sampled motion is admissible.
+
+    ``endpoints_singular_raise``: a singular ``x`` or ``w`` raises
+    :class:`SingularPointError` (for the user's start and goal) instead of
+    failing the piece.
+    """
+    try:
+        p = plan(system, x, w, tol, trajectory_points=CHECK_POINTS, **options)
+    except SingularPointError as exc:
+        if endpoints_singular_raise and not str(exc).startswith("the path meets"):
+            raise
+        return None
+    except (PlanningError, IntegrationError):
+        return None
+    if not checker.valid_motion(p.trajectory.states):
+        return None
+    return p
+
+
+def plan_global(
+    sys: ControlSystem,
+    start: Sequence[object],
+    goal: Sequence[object],
+    tol: float = 1e-8,
+    *,
+    world: World | None = None,
+    limits: Limits | None = None,
+    singular_margin: float = 0.0,
+    time_limit: float = 60.0,
+    seed: int | None = 0,
+    max_piece: float = MAX_PIECE,
+    engine: str = "auto",
+    direct: bool = True,
+    anchor: str = "auto",
+    max_iterations: int = 30,
+    clearance: float = 0.0,
+    path_clearance: float = PATH_CLEARANCE,
+) -> GlobalPlan:
+    """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
+
+    Parameters
+    ----------
+    sys : ControlSystem
+        The model; its ``geometry`` (outline) is needed with a ``world``.
+    start, goal:
+        Configurations (model coordinates).
+    tol:
+        Final Euclidean error allowed.
+    world:
+        Obstacles and bounds, or ``None``.
+    limits:
+        Box limits (default: the model's own, e.g. the trident's ``|φ_i| ≤ 5π/6``).
+    singular_margin:
+        Required margin from the singular set (models that define one).
+    time_limit:
+        Seconds for the whole planning (OMPL gets at most half).
+    seed:
+        Seed of OMPL's random sampling (``None``: OMPL's own).
+    max_piece:
+        Longest piece steered at once (configuration-space Euclidean length).
+    engine:
+        Integration engine (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
+    direct:
+        Try the single nilpotent plan first (see the module doc).
+    anchor, max_iterations:
+        Passed to :func:`~nilpotent.planning.iterative.plan` for every piece.
+    clearance:
+        Required distance robot–obstacles along the motion (> this; default 0:
+        no contact).
+    path_clearance:
+        Extra clearance the OMPL path keeps (except within ``PATH_END_ZONE`` of
+        the start and the goal, configuration space): the tube in which the
+        steered motions of the pieces have room (Laumond's approximation needs
+        a path with positive clearance; a path that grazes obstacles needs
+        tiny pieces, whose number grows like ``clearance^{-r}`` for a system of step ``r``).
+
+    Raises
+    ------
+    PlanningError
+        Start or goal not admissible, no path within the time limit, a piece
+        that cannot be steered inside the free space even when short, or a
+        final verification that fails (never returns an unverified plan).
+    """
+    t0 = time.perf_counter()
+    deadline = t0 + time_limit
+    if not (tol > 0 and math.isfinite(tol)):
+        raise PlanningError(f"tol must be a positive number, got {tol}")
+    if not (time_limit > 0 and math.isfinite(time_limit)):
+        raise PlanningError(f"time limit must be a positive number of seconds, got {time_limit}")
+    if not (max_piece > 0 and math.isfinite(max_piece)):
+        raise PlanningError(f"max_piece must be > 0, got {max_piece}")
+    options: dict[str, Any] = {"engine": engine, "anchor": anchor,
+                               "max_iterations": max_iterations}
+    checker = Checker(sys, world, limits, singular_margin, clearance)
+    assert checker.limits is not None
+    x0 = np.array([float(v) for v in start])  # type: ignore[arg-type]
+    xg = np.array([float(v) for v in goal])  # type: ignore[arg-type]
+    for what, q in (("start", x0), ("goal", xg)):
+        why = checker.why_invalid(q)
+        if why:
+            raise PlanningError(f"the {what} is not admissible: {why}")
+
+    def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
+               route: str, planner_s: float, last: Plan) -> GlobalPlan:
+        v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
+        if not v.admissible:
+            raise PlanningError(
+                "the re-simulated plan is not admissible (clearance "
+                f"{v.clearance}, limit margin {v.limit_margin}, singular margin "
+                f"{v.min_singular_margin}); no plan returned"
+            )
+        if not v.error <= tol:
+            raise PlanningError(
+                f"the re-simulated plan misses the goal by {v.error:.3g} > tol {tol:g}"
+            )
+        whole = Plan(
+            system=sys, start=tuple(x0), goal=tuple(xg), segments=tuple(segments),
+            reached=v.reached, error=v.error, iterations=tuple(iterations),
+            trajectory=Trajectory(v.times, v.states), tol=tol, anchor=last.anchor,
+            builder=last.builder, initial_error=float(np.linalg.norm(xg - x0)),
+            seconds=time.perf_counter() - t0,
+        )
+        return GlobalPlan(whole, world, checker.limits, singular_margin,  # type: ignore[arg-type]
+                          tuple(tuple(float(c) for c in w) for w in waypoints), tuple(pieces),
+                          v, route, planner_s, time_limit, time.perf_counter() - t0,
+                          checker.clearance)
+
+    # 1. direct attempt (old behaviour)
+    near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
+    if direct and near and _chord_valid(checker.valid, x0, xg):
+        p = steer_admissible(sys, checker, x0, xg, tol, options, endpoints_singular_raise=True)
+        if p is not None and p.converged:
+            piece = Piece(tuple(xg), 0, len(p.segments), p.error, len(p.iterations), 0)
+            try:
+                return finish(list(p.segments), list(p.iterations), [x0, xg], [piece],
+                              "direct", 0.0, p)
+            except PlanningError:
+                pass
+    # 2. a path in configuration space, with room around it where possible
+    planner_s = 0.0
+    path_valid = checker.valid
+    if world is not None and path_clearance > 0:
+        path_valid = _roomy(checker, x0, xg, path_clearance, PATH_END_ZONE)
+    if _chord_valid(path_valid, x0, xg):
+        path = [x0, xg]
+    else:
+        budget = max(0.1, 0.5 * (deadline - time.perf_counter()))
+        t_ompl = time.perf_counter()
+        path = ompl_path(checker, x0, xg, budget, seed, valid=path_valid)
+        planner_s = time.perf_counter() - t_ompl
+    waypoints = _densify(path, max_piece)
+    # 3. steer piece by piece, halving pieces whose motion is not admissible
+    targets: deque[tuple[np.ndarray, int]] = deque((w, 0) for w in waypoints[1:])
+    x, prev = x0.copy(), x0.copy()
+    used = [x0]
+    segments: list[Segment] = []
+    iterations: list[Iteration] = []
+    pieces: list[Piece] = []
+    last: Plan | None = None
+    while targets:
+        if time.perf_counter() > deadline:
+            raise PlanningError(
+                f"no plan within the time limit of {time_limit:g} s ({len(pieces)} of about "
+                f"{len(pieces) + len(targets)} pieces steered); raise --time-limit"
+            )
+        w, halvings = targets[0]
+        final = len(targets) == 1
+        length = float(np.linalg.norm(w - prev))
+        piece_tol = tol if final else max(tol, min(MID_TOL, MID_TOL_FRACTION * length))
+        p = steer_admissible(sys, checker, x, w, piece_tol, options)
+        if p is None or (final and not p.converged):
+            off = float(np.linalg.norm(x - prev))
+            if length == 0.0:
+                raise PlanningError(
+                    f"cannot steer back onto the path at {np.array2string(w, precision=3)} "
+                    f"from {off:.3g} away inside the free space and limits"
+                )
+            if off > max(tol, MID_TOL_FRACTION * length):
+                # the state reached is far off the path relative to this piece: back onto it
+                targets.appendleft((prev.copy(), halvings))
+                continue
+            if length < MIN_PIECE:
+                raise PlanningError(
+                    f"cannot steer inside the free space and limits near "
+                    f"{np.array2string(w, precision=3)}: pieces down to {MIN_PIECE:g} fail"
+                )
+            targets.appendleft(((prev + w) / 2, halvings + 1))
+            continue
+        targets.popleft()
+        pieces.append(Piece(tuple(float(c) for c in w), len(segments), len(p.segments),
+                            p.error, len(p.iterations), halvings))
+        segments.extend(p.segments)
+        iterations.extend(p.iterations)
+        x = np.array(p.reached)
+        prev = w
+        used.append(w)
+        last = p
+    assert last is not None
+    return finish(segments, iterations, used, pieces, "global", planner_s, last)

@@ -1,0 +1,173 @@
+"""A robot's outline evaluated at configurations: shapely geometries, limits, singular margin.
+
+:class:`Robot` compiles a system's :class:`~nilpotent.core.outline.Outline`
+(parameters substituted) with ``sympy.lambdify`` (the expressions came from
+the safe grammar or the built-ins) and turns arrays of configurations
+``(N, n)`` into shapely 2 geometries, vectorised (``shapely.polygons``,
+``shapely.linestrings``, ``shapely.points``): one row of ``P`` parts per
+configuration.  Discs are kept as their centre points plus a radius (the
+exact distance to a disc is the distance to its centre minus the radius).
+
+It also evaluates the box limits (:meth:`Robot.limit_margin`: the signed
+distance to the nearest bound, negative outside) and, for models that have
+one, the singular margin (:func:`singular_margin_function`:
+``|det M(q)|`` of ``trident-snake-joints``, the matrix of the no-slip
+constraints solved for the body velocity; 0 on the singular set).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+import sympy as sp
+
+from nilpotent.core.outline import Limits, Outline
+from nilpotent.core.system import ControlSystem
+from nilpotent.errors import OptionError
+
+__all__ = ["Robot", "singular_margin_function"]
+
+
+def singular_margin_function(system: ControlSystem) -> Callable[[np.ndarray], np.ndarray] | None:
+    """``q (N, n) ↦ margin (N,)`` from the singular set, or ``None`` if the model has none.
+
+    ``trident-snake-joints``: ``|det M(q)|`` (:func:`nilpotent.models.trident.joint_determinant`
+    with the model's ``r`` and ``l``).
+    """
+    if system.name != "trident-snake-joints":
+        return None
+    from nilpotent.models.trident import TridentGeometry, joint_determinant
+
+    geom = TridentGeometry.from_system(system)
+
+    def margin(q: np.ndarray) -> np.ndarray:
+        return np.abs(joint_determinant(np.asarray(q, dtype=float), geom))
+
+    return margin
+
+
+def _lambdify(system: ControlSystem, exprs: tuple[sp.Expr, ...]) -> Callable:
+    subs = {sp.Symbol(k): v for k, v in system.parameters}
+    return sp.lambdify([system.coordinates], [sp.S(e).subs(subs) for e in exprs], "numpy")
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """The outline, limits and singular margin of a system, evaluated numerically.
+
+    Parameters
+    ----------
+    system:
+        The model (its ``geometry`` may be ``None``: then the robot has no
+        outline and only limits/margins are checked).
+    limits:
+        The limits to check (default: the system's own).
+    """
+
+    system: ControlSystem
+    limits: Limits | None = None
+    _fn: Callable | None = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.limits is None:
+            object.__setattr__(self, "limits", self.system.limits)
+        outline = self.system.geometry
+        fn = None if outline is None else _lambdify(self.system, outline.expressions())
+        object.__setattr__(self, "_fn", fn)
+
+    @property
+    def outline(self) -> Outline | None:
+        return self.system.geometry
+
+    @property
+    def has_outline(self) -> bool:
+        return self._fn is not None
+
+    def _values(self, q: np.ndarray) -> np.ndarray:
+        """All outline expressions at ``q (N, n)``: shape ``(N, E)``."""
+        assert self._fn is not None
+        vals = self._fn(q.T)
+        return np.stack([np.broadcast_to(np.asarray(v, dtype=float), (q.shape[0],))
+                         for v in vals], axis=1)
+
+    def parts(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Shapely geometries ``(N, P)`` of the outline's parts and their radii ``(N, P)``.
+
+        ``P`` = polygons + segments + discs, in that order.  Polygons and
+        segments have radius 0; a disc is its centre point with its radius
+        (evaluated per configuration: it may depend on the parameters).
+
+        Raises
+        ------
+        OptionError
+            Wrong number of coordinates, or a model without outline.
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        if q.shape[1] != self.system.n:
+            raise OptionError(
+                f"configurations of {self.system.name} need {self.system.n} coordinates, "
+                f"got shape {q.shape}"
+            )
+        outline = self.outline
+        if outline is None:
+            raise OptionError(f"model {self.system.name} has no [geometry] (robot outline)")
+        v = self._values(q)
+        n = q.shape[0]
+        geoms, radii = [], []
+        k = 0
+        for poly in outline.polygons:
+            m = len(poly)
+            coords = v[:, k: k + 2 * m].reshape(n, m, 2)
+            k += 2 * m
+            geoms.append(shapely.polygons(coords))
+            radii.append(np.zeros(n))
+        for _ in outline.segments:
+            coords = v[:, k: k + 4].reshape(n, 2, 2)
+            k += 4
+            geoms.append(shapely.linestrings(coords))
+            radii.append(np.zeros(n))
+        for _ in outline.discs:
+            geoms.append(shapely.points(v[:, k: k + 2]))
+            radii.append(v[:, k + 2])
+            k += 3
+        return np.stack(geoms, axis=1), np.stack(radii, axis=1)
+
+    def points(self, q: np.ndarray) -> dict[str, np.ndarray]:
+        """Raw outline coordinates: ``polygons`` list of ``(N, k, 2)``, ``segments``
+        ``(N, S, 2, 2)``, ``discs`` ``(N, D, 2)`` and ``radii`` ``(N, D)`` (for drawing)."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        outline = self.outline
+        if outline is None:
+            return {"polygons": [], "segments": np.zeros((len(q), 0, 2, 2)),
+                    "discs": np.zeros((len(q), 0, 2)), "radii": np.zeros((len(q), 0))}
+        v = self._values(q)
+        n = q.shape[0]
+        k = 0
+        polys = []
+        for poly in outline.polygons:
+            polys.append(v[:, k: k + 2 * len(poly)].reshape(n, len(poly), 2))
+            k += 2 * len(poly)
+        s = len(outline.segments)
+        segs = v[:, k: k + 4 * s].reshape(n, s, 2, 2)
+        k += 4 * s
+        d = len(outline.discs)
+        disc = v[:, k: k + 3 * d].reshape(n, d, 3)
+        return {"polygons": polys, "segments": segs, "discs": disc[..., :2],
+                "radii": disc[..., 2]}
+
+    def limit_margin(self, q: np.ndarray) -> np.ndarray:
+        """``min_j min(x_j − lo_j, hi_j − x_j)`` over the limited coordinates, ``(N,)``.
+
+        Non-negative iff every limit holds; ``+inf`` where there are no limits.
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        out = np.full(q.shape[0], np.inf)
+        names = self.system.coordinate_names
+        assert self.limits is not None
+        for name, lo, hi in self.limits.bounds:
+            j = names.index(name)
+            out = np.minimum(out, np.minimum(q[:, j] - lo, hi - q[:, j]))
+        return out

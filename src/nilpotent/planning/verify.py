@@ -1,0 +1,232 @@
+"""Is a configuration, or a re-simulated motion, admissible: limits, collisions, singular margin.
+
+:class:`Checker` bundles what a plan must respect — the box limits, the
+world's obstacles and bounds (through the robot's outline), and a margin from
+the singular set where the model has one — and evaluates it on arrays of
+configurations ``(N, n)`` (vectorised: one shapely call per batch).
+
+:func:`verify_segments` re-simulates controls on the true system densely and
+measures the motion: minimum clearance to the obstacles, minimum limit margin,
+minimum singular margin, final error.  Every plan the global planner returns
+is checked this way.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from nilpotent.core.outline import Limits
+from nilpotent.core.system import ControlSystem
+from nilpotent.errors import OptionError
+from nilpotent.planning.controls import Segment
+from nilpotent.planning.robot import Robot, singular_margin_function
+from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.world import World
+
+__all__ = ["Checker", "Verification", "verify_segments", "verify_states"]
+
+
+@dataclass(frozen=True, eq=False)
+class Checker:
+    """Admissibility of configurations for a system in a world.
+
+    Parameters
+    ----------
+    system:
+        The model (its ``geometry`` is its outline; needed when ``world`` is given).
+    world:
+        Obstacles and bounds, or ``None``.
+    limits:
+        Box limits (default: the system's).
+    singular_margin:
+        Required ``margin(q) ≥ singular_margin`` where the model defines a margin
+        (:func:`~nilpotent.planning.robot.singular_margin_function`); 0: none required.
+    clearance:
+        Required distance to the obstacles (> this value; default 0: no contact).
+
+    Raises
+    ------
+    OptionError
+        A world for a model without outline, or a singular margin for a model
+        that defines none.
+    """
+
+    system: ControlSystem
+    world: World | None = None
+    limits: Limits | None = None
+    singular_margin: float = 0.0
+    clearance: float = 0.0
+
+    def __post_init__(self) -> None:
+        robot = Robot(self.system, self.limits)
+        object.__setattr__(self, "limits", robot.limits)
+        object.__setattr__(self, "robot", robot)
+        if self.world is not None and not robot.has_outline:
+            raise OptionError(
+                f"model {self.system.name} has no robot outline: add a [geometry] table to the "
+                "model file to plan in a world (docs/model-files.md)"
+            )
+        margin_fn = singular_margin_function(self.system)
+        if self.singular_margin and margin_fn is None:
+            raise OptionError(
+                f"--singular-margin: model {self.system.name} defines no singular margin "
+                "(trident-snake-joints does: |det M|)"
+            )
+        if not (math.isfinite(self.singular_margin) and self.singular_margin >= 0):
+            raise OptionError(f"--singular-margin must be >= 0, got {self.singular_margin}")
+        object.__setattr__(self, "margin_fn", margin_fn)
+
+    def measures(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(clearance, limit margin, singular margin)`` at ``q (N, n)``, each ``(N,)``.
+
+        ``+inf`` for what does not apply (no world, no limits, no singular set).
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        clear = np.full(q.shape[0], np.inf)
+        if self.world is not None:
+            geoms, radii = self.robot.parts(q)  # type: ignore[attr-defined]
+            clear = self.world.clearance(geoms, radii).min(axis=1)
+        lim = self.robot.limit_margin(q)  # type: ignore[attr-defined]
+        sing = np.full(q.shape[0], np.inf)
+        if self.margin_fn is not None:  # type: ignore[attr-defined]
+            sing = self.margin_fn(q)  # type: ignore[attr-defined]
+        return clear, lim, sing
+
+    def valid(
+        self, q: np.ndarray, extra_clearance: float = 0.0, limit_slack: float = 0.0
+    ) -> np.ndarray:
+        """Boolean ``(N,)``: every limit holds, no contact, singular margin kept.
+
+        The same verdict as :meth:`measures` (clearance ``> self.clearance``,
+        limit margin ``≥ 0``, singular margin ``≥ self.singular_margin``), with
+        shapely's predicates instead of distances (faster).  ``extra_clearance``
+        and ``limit_slack`` demand more (used to cover the motion between samples).
+        """
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        ok = np.all(np.isfinite(q), axis=1)
+        ok &= self.robot.limit_margin(q) >= limit_slack  # type: ignore[attr-defined]
+        if self.margin_fn is not None:  # type: ignore[attr-defined]
+            ok &= self.margin_fn(q) >= self.singular_margin  # type: ignore[attr-defined]
+        if self.world is not None and ok.any():
+            geoms, radii = self.robot.parts(q[ok])  # type: ignore[attr-defined]
+            hit = self.world.collides(geoms, radii, self.clearance + extra_clearance).any(axis=1)
+            ok[np.flatnonzero(ok)[hit]] = False
+        return ok
+
+    def valid_motion(self, states: np.ndarray) -> bool:
+        """Every sample of a motion ``(N, n)`` admissible, with margins that cover the
+        motion between consecutive samples: half the largest step of a limited
+        coordinate (limits), half the largest displacement of an outline point
+        (clearance).  Exact for straight motion between samples, a first-order
+        cover otherwise; the whole plan is re-verified more densely anyway.
+        """
+        q = np.atleast_2d(np.asarray(states, dtype=float))
+        slack = extra = 0.0
+        if len(q) > 1:
+            names = self.system.coordinate_names
+            assert self.limits is not None
+            cols = [names.index(k) for k, _, _ in self.limits.bounds]
+            if cols:
+                slack = 0.5 * float(np.abs(np.diff(q[:, cols], axis=0)).max())
+            if self.world is not None:
+                pts = self.robot.points(q)  # type: ignore[attr-defined]
+                moved = [np.diff(p, axis=0) for p in pts["polygons"]]
+                moved += [np.diff(pts["segments"], axis=0), np.diff(pts["discs"], axis=0)]
+                extra = 0.5 * max(
+                    (float(np.linalg.norm(m, axis=-1).max()) for m in moved if m.size),
+                    default=0.0,
+                )
+        return bool(np.all(self.valid(q, extra, slack)))
+
+    def why_invalid(self, q: Sequence[float]) -> str:
+        """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""
+        clear, lim, sing = (float(v[0]) for v in self.measures(np.asarray(q)[None, :]))
+        reasons = []
+        if clear <= self.clearance:
+            reasons.append(f"it touches an obstacle or leaves the bounds (clearance {clear:.3g})")
+        if lim < 0:
+            names = self.system.coordinate_names
+            assert self.limits is not None
+            bad = [f"{k} = {q[names.index(k)]:.4g} outside [{lo:.4g}, {hi:.4g}]"
+                   for k, lo, hi in self.limits.bounds
+                   if not lo <= q[names.index(k)] <= hi]
+            reasons.append("limits violated: " + ", ".join(bad))
+        if self.margin_fn is not None and sing < self.singular_margin:  # type: ignore[attr-defined]
+            reasons.append(f"singular margin {sing:.3g} below {self.singular_margin:g}")
+        return "; ".join(reasons)
+
+
+@dataclass(frozen=True, eq=False)
+class Verification:
+    """What a dense re-simulation of controls shows.
+
+    Attributes
+    ----------
+    times, states:
+        The samples ``(N,)``, ``(N, n)``.
+    clearance:
+        Minimum distance robot–obstacles along the motion (model length
+        units); ``None`` without a world.
+    limit_margin:
+        Minimum signed distance to the limits (``< 0``: violated); ``None``
+        without limits.
+    limits_ok:
+        Every sample within the limits.
+    min_singular_margin:
+        Minimum singular margin; ``None`` where the model defines none.
+    admissible:
+        Every sample admissible for the checker.
+    reached, error:
+        Last state and its distance to the goal.
+    """
+
+    times: np.ndarray
+    states: np.ndarray
+    clearance: float | None
+    limit_margin: float | None
+    limits_ok: bool
+    min_singular_margin: float | None
+    admissible: bool
+    reached: tuple[float, ...]
+    error: float
+
+
+def verify_states(
+    checker: Checker, times: np.ndarray, states: np.ndarray, goal: Sequence[float]
+) -> Verification:
+    """Measure sampled states ``(N, n)`` against ``checker`` (see :class:`Verification`)."""
+    clear, lim, sing = checker.measures(states)
+    ok = checker.valid(states)
+    limits = checker.limits
+    assert limits is not None
+    return Verification(
+        times=times,
+        states=states,
+        clearance=float(clear.min()) if checker.world is not None else None,
+        limit_margin=float(lim.min()) if limits else None,
+        limits_ok=bool(np.all(lim >= 0)),
+        min_singular_margin=(float(sing.min()) if checker.margin_fn is not None  # type: ignore[attr-defined]
+                             else None),
+        admissible=bool(np.all(ok)),
+        reached=tuple(float(v) for v in states[-1]),
+        error=float(np.linalg.norm(states[-1] - np.asarray(goal, dtype=float))),
+    )
+
+
+def verify_segments(
+    checker: Checker,
+    start: Sequence[float],
+    segments: Sequence[Segment],
+    goal: Sequence[float],
+    points_per_segment: int = 200,
+    engine: str = "auto",
+) -> Verification:
+    """Re-simulate ``segments`` from ``start`` on the true system (DOP853, rtol 1e-12), sample
+    ``points_per_segment`` per segment, and measure the motion (:func:`verify_states`)."""
+    times, states = simulate_path(checker.system, start, list(segments), points_per_segment,
+                                  engine)
+    return verify_states(checker, times, states, goal)

@@ -1,0 +1,242 @@
+"""Worlds: workspace bounds and obstacles (TOML world files), collision checks with shapely 2.
+
+A world file (INTERFACE.md, ``docs/worlds.md``)::
+
+    name = "room"
+    [bounds]                  # optional: the workspace, model length units
+    x = [-1.0, 6.0]
+    y = [-2.0, 4.0]
+    [[obstacles]]
+    polygon = [[1.0, 0.5], [2.0, 0.5], [2.0, 1.5], [1.0, 1.5]]
+    [[obstacles]]
+    disc = { center = [3.0, -0.5], radius = 0.4 }
+
+Numbers may be constant expressions of the safe grammar (``"sqrt(2)"``).
+
+Collision checks are shapely 2's vectorised predicates and distances: the
+polygon obstacles and, when bounds are given, the outside of the bounds (a
+frame polygon around the workspace box) form one prepared geometry; disc
+obstacles are kept exact (distance to the centre minus the radius).  The
+clearance of a robot part (a shapely geometry with a radius, see
+:class:`nilpotent.planning.robot.Robot`) is its distance to that set minus its
+radius: ``≤ 0`` means contact or overlap.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import shapely
+
+from nilpotent.core.expressions import parse_expression, real_value
+from nilpotent.errors import ExpressionError, WorldError
+
+__all__ = ["World", "load_world", "world_from_dict"]
+
+#: How far beyond the bounds the frame polygon (the outside of the workspace) reaches,
+#: as a multiple of the workspace's size.
+_FRAME = 100.0
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    """A planar workspace: bounds ``((xlo, xhi), (ylo, yhi))`` or ``None``, obstacles.
+
+    Attributes
+    ----------
+    name:
+        The world's name.
+    bounds:
+        The workspace box, or ``None`` (unbounded).
+    polygons:
+        Obstacle polygons, each ``((x, y), ...)``.
+    discs:
+        Obstacle discs ``((cx, cy), radius)``.
+    """
+
+    name: str
+    bounds: tuple[tuple[float, float], tuple[float, float]] | None = None
+    polygons: tuple[tuple[tuple[float, float], ...], ...] = ()
+    discs: tuple[tuple[tuple[float, float], float], ...] = ()
+    _blocked: Any = field(init=False, repr=False)
+    _centres: Any = field(init=False, repr=False)
+    _radii: Any = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        shapes = [shapely.Polygon(p) for p in self.polygons]
+        for i, s in enumerate(shapes):
+            if not s.is_valid:
+                raise WorldError(
+                    f"world {self.name!r}: obstacles polygon {i} is not a simple polygon "
+                    f"({shapely.is_valid_reason(s)})"
+                )
+        if self.bounds is not None:
+            (xlo, xhi), (ylo, yhi) = self.bounds
+            size = max(xhi - xlo, yhi - ylo)
+            box = shapely.box(xlo, ylo, xhi, yhi)
+            outer = shapely.box(xlo - _FRAME * size, ylo - _FRAME * size,
+                                xhi + _FRAME * size, yhi + _FRAME * size)
+            shapes.append(outer.difference(box))
+        blocked = shapely.union_all(shapes) if shapes else None
+        if blocked is not None:
+            shapely.prepare(blocked)
+        object.__setattr__(self, "_blocked", blocked)
+        object.__setattr__(self, "_centres", shapely.points([c for c, _ in self.discs])
+                           if self.discs else None)
+        object.__setattr__(self, "_radii", np.array([r for _, r in self.discs], dtype=float))
+
+    def clearance(self, geoms: np.ndarray, radii: np.ndarray | float = 0.0) -> np.ndarray:
+        """Distance of each geometry to the obstacles and the outside of the bounds, minus
+        its radius; same shape as ``geoms``; ``+inf`` in an empty unbounded world.
+
+        ``≤ 0``: the part touches or overlaps an obstacle (or leaves the bounds).
+        """
+        geoms = np.asarray(geoms)
+        out = np.full(geoms.shape, np.inf)
+        if self._blocked is not None:
+            out = shapely.distance(geoms, self._blocked)
+        if self._centres is not None:
+            d = shapely.distance(geoms[..., None], self._centres) - self._radii
+            out = np.minimum(out, d.min(axis=-1))
+        return out - radii
+
+    def collides(
+        self, geoms: np.ndarray, radii: np.ndarray | float = 0.0, margin: float = 0.0
+    ) -> np.ndarray:
+        """Boolean, same shape as ``geoms``: :meth:`clearance` ``≤ margin`` (contact, overlap,
+        leaving the bounds, or closer than ``margin``), by shapely's predicates
+        (``intersects`` on the prepared obstacles where the distance allowed is 0,
+        ``dwithin`` elsewhere) without computing distances."""
+        geoms = np.asarray(geoms)
+        reach = np.broadcast_to(np.asarray(radii, dtype=float) + margin, geoms.shape)
+        out = np.zeros(geoms.shape, dtype=bool)
+        if self._blocked is not None:
+            flat = reach <= 0
+            out[flat] = shapely.intersects(self._blocked, geoms[flat])
+            out[~flat] = shapely.dwithin(geoms[~flat], self._blocked, reach[~flat])
+        if self._centres is not None:
+            near = shapely.dwithin(geoms[..., None], self._centres, reach[..., None] + self._radii)
+            out |= near.any(axis=-1)
+        return out
+
+    def point_clearance(self, xy: np.ndarray) -> np.ndarray:
+        """:meth:`clearance` of points ``(..., 2)``."""
+        return self.clearance(shapely.points(np.asarray(xy, dtype=float)))
+
+    def to_json(self) -> dict[str, Any]:
+        """The world as a world-file structure (JSON-ready)."""
+        out: dict[str, Any] = {"name": self.name}
+        if self.bounds is not None:
+            out["bounds"] = {"x": list(self.bounds[0]), "y": list(self.bounds[1])}
+        out["obstacles"] = [{"polygon": [list(p) for p in poly]} for poly in self.polygons]
+        out["obstacles"] += [{"disc": {"center": list(c), "radius": r}} for c, r in self.discs]
+        return out
+
+
+def _number(value: object, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | str):
+        raise WorldError(f"{where}: expected a number, got {value!r}")
+    if isinstance(value, str):
+        try:
+            v = real_value(parse_expression(value, {}, where=where), where=where)
+        except ExpressionError as exc:
+            raise WorldError(str(exc)) from None
+    else:
+        v = float(value)
+    if not math.isfinite(v):
+        raise WorldError(f"{where}: expected a finite number, got {value!r}")
+    return v
+
+
+def _pair(value: object, where: str) -> tuple[float, float]:
+    if not isinstance(value, list) or len(value) != 2:
+        raise WorldError(f"{where}: expected a pair [a, b], got {value!r}")
+    return (_number(value[0], f"{where}[0]"), _number(value[1], f"{where}[1]"))
+
+
+def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
+    """Build a :class:`World` from the world-file structure (module doc).
+
+    Raises
+    ------
+    WorldError
+        Unknown keys, malformed bounds (``lo ≥ hi``), polygons with fewer than
+        3 points or self-intersecting, discs with a non-positive radius.
+    """
+    if not isinstance(data, Mapping):
+        raise WorldError(f"{source}: a world is a table with name, bounds, obstacles")
+    for key in data:
+        if key not in ("name", "bounds", "obstacles"):
+            raise WorldError(f"{source}: unknown key {key!r} (allowed: name, bounds, obstacles)")
+    name = data.get("name", Path(source).stem if not source.startswith("<") else "world")
+    if not isinstance(name, str) or not name:
+        raise WorldError(f"{source}: name must be a non-empty string")
+    bounds = None
+    if "bounds" in data:
+        raw = data["bounds"]
+        if not isinstance(raw, Mapping) or set(raw) != {"x", "y"}:
+            raise WorldError(f"{source}: bounds needs exactly x = [lo, hi] and y = [lo, hi]")
+        bx, by = _pair(raw["x"], f"{source}: bounds.x"), _pair(raw["y"], f"{source}: bounds.y")
+        for axis, (lo, hi) in (("x", bx), ("y", by)):
+            if not lo < hi:
+                raise WorldError(f"{source}: bounds.{axis} = [{lo}, {hi}] needs lo < hi")
+        bounds = (bx, by)
+    polygons, discs = [], []
+    obstacles = data.get("obstacles", [])
+    if not isinstance(obstacles, list):
+        raise WorldError(f"{source}: obstacles must be a list of [[obstacles]] tables")
+    for i, ob in enumerate(obstacles):
+        where = f"{source}: obstacles[{i}]"
+        if not isinstance(ob, Mapping) or len(ob) != 1 or next(iter(ob)) not in ("polygon", "disc"):
+            raise WorldError(f"{where}: an obstacle is either polygon = [...] or disc = {{...}}")
+        if "polygon" in ob:
+            pts = ob["polygon"]
+            if not isinstance(pts, list) or len(pts) < 3:
+                raise WorldError(f"{where}.polygon: needs at least 3 points [x, y]")
+            polygons.append(tuple(_pair(p, f"{where}.polygon[{j}]") for j, p in enumerate(pts)))
+        else:
+            d = ob["disc"]
+            if not isinstance(d, Mapping) or set(d) != {"center", "radius"}:
+                raise WorldError(f"{where}.disc: needs exactly center = [x, y] and radius")
+            radius = _number(d["radius"], f"{where}.disc.radius")
+            if radius <= 0:
+                raise WorldError(f"{where}.disc.radius must be > 0, got {radius}")
+            discs.append((_pair(d["center"], f"{where}.disc.center"), radius))
+    try:
+        return World(name, bounds, tuple(polygons), tuple(discs))
+    except WorldError as exc:
+        raise WorldError(f"{source}: {exc}") from None
+
+
+def load_world(path: str | Path) -> World:
+    """Read a TOML world file (module doc).
+
+    Parameters
+    ----------
+    path : str or Path
+        The world file (TOML).
+
+    Raises
+    ------
+    WorldError
+        Missing or unreadable file, TOML syntax error, or what
+        :func:`world_from_dict` reports.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise WorldError(f"{path}: world file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise WorldError(f"{path}: cannot read the world file ({exc})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise WorldError(f"{path}: TOML syntax error: {exc}") from None
+    return world_from_dict(data, str(path))
