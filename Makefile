@@ -5,7 +5,7 @@ PY      = $(VENV)/bin/python
 STAMP   = $(VENV)/.installed-$(shell sha1sum pyproject.toml | cut -c1-12)
 OUT    ?= nilpotent-paper
 
-.PHONY: demo test lint bench venv clean
+.PHONY: demo test lint bench docs venv clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -21,11 +21,19 @@ demo: $(STAMP)
 	@echo "open $(OUT)/index.html"
 
 lint: $(STAMP)
-	$(VENV)/bin/ruff check src tests benchmarks examples
+	$(VENV)/bin/ruff check src tests benchmarks examples docs/hooks
+
+export NO_MKDOCS_2_WARNING := 1
 
 test: $(STAMP)
-	$(VENV)/bin/ruff check src tests benchmarks examples
-	$(VENV)/bin/pytest -n 2 --dist loadfile
+	$(VENV)/bin/ruff check src tests benchmarks examples docs/hooks
+	$(VENV)/bin/pytest -n 2 --dist loadfile --nbmake tests docs/tutorial.ipynb
+	$(VENV)/bin/mkdocs build --strict --site-dir build/site
+	$(VENV)/bin/pyright --pythonpath $(PY) src
+
+docs: $(STAMP)
+	$(VENV)/bin/mkdocs build --strict --site-dir build/site
+	@echo "open build/site/index.html"
 
 bench: $(STAMP)
 	for b in benchmarks/*.py; do $(PY) $$b || exit 1; done

@@ -21,7 +21,7 @@ PACKAGE = Path(nilpotent.__file__).parent
 
 #: Bottom to top.  Names on one line form one layer.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "progress", "outputs", "strict_json", "version"),
+    ("errors", "progress", "outputs", "strict_json", "version", "typeset"),
     ("core",),
     ("numeric",),
     ("models",),

@@ -120,6 +120,30 @@ def test_page_loads_every_image_without_errors(chromium: str, site: Path) -> Non
     assert len(re.findall(r'<img src="figures/anim_\w+\.gif"', done.stdout)) == 3
 
 
+def test_formulas_are_sized_mathml_with_their_latex(chromium: str, site: Path) -> None:
+    """Every formula is a MathML element the browser laid out (non-empty box), with its LaTeX."""
+    source = (site / "index.html").read_text(encoding="utf-8")
+    assert "<script src" not in source and "http://" not in source.replace(
+        "http://www.w3.org/1998/Math/MathML", ""
+    )
+    assert "https://" not in source
+    url = (site / "index.html").as_uri()
+    done = _run(chromium, "--virtual-time-budget=15000", "--dump-dom", url)
+    assert done.returncode == 0, done.stderr[-2000:]
+    check = _attrs(done.stdout, "selfcheck")
+    assert check.get("data-done") == "true", check
+    # the fields (3 + 3), frames (2 x 6), coordinates (2 x 6), approximations (2 x 6),
+    # brackets (3 x 4) and the matrices are all typeset
+    assert int(check["data-formulas"]) >= 60, check
+    assert check["data-formulas-sized"] == check["data-formulas"], check
+    assert check["data-errors"] == "0", check
+    assert _console_lines(done.stderr) == []
+    spans = re.findall(r'<(?:span|div) class="formula" data-latex="([^"]+)"><math', done.stdout)
+    assert len(spans) == int(check["data-formulas"])
+    assert any("\\partial_{" in s for s in spans) and any("pmatrix" in s for s in spans)
+    assert done.stdout.count('class="copy-latex"') == len(spans)
+
+
 def test_animation_players_load_all_frames(chromium: str, site: Path) -> None:
     players = sorted((site / "figures").glob("anim_*.html"))
     assert len(players) == 3
@@ -149,3 +173,23 @@ def test_screenshot(chromium: str, site: Path) -> None:
     assert done.returncode == 0, done.stderr[-2000:]
     assert shot.exists() and shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert shot.stat().st_size > 20_000  # a rendered page, not a blank image
+
+
+def test_notebook_displays_render_as_sized_mathml(chromium: str, tmp_path: Path) -> None:
+    """What Jupyter shows (``_repr_html_``) renders in the browser: every formula sized."""
+    import nilpotent as nil
+    from nilpotent.report.page import page
+
+    snake = nil.get_model("trident-snake")
+    approx = nil.approximate(snake)
+    shown = (snake, approx.filtration, approx.coordinates, approx)
+    sections = [(f"s{k}", type(obj).__name__, obj._repr_html_()) for k, obj in enumerate(shown)]
+    path = tmp_path / "reprs.html"
+    path.write_text(page("reprs", "notebook displays", sections), encoding="utf-8")
+    done = _run(chromium, "--virtual-time-budget=10000", "--dump-dom", path.as_uri())
+    assert done.returncode == 0, done.stderr[-2000:]
+    check = _attrs(done.stdout, "selfcheck")
+    assert check.get("data-done") == "true", check
+    assert int(check["data-formulas"]) >= 40, check
+    assert check["data-formulas-sized"] == check["data-formulas"], check
+    assert check["data-errors"] == "0" and _console_lines(done.stderr) == []

@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 import symengine as se
 import sympy as sp
 
+from nilpotent import typeset
 from nilpotent.core.filtration import Filtration
 from nilpotent.core.privileged import (
     PrivilegedCoordinates,
@@ -57,7 +58,8 @@ class Certificate:
     Attributes
     ----------
     orders:
-        Computed $\mathrm{ord}_p(y_j)$ of the privileged coordinates.
+        Computed $\mathrm{ord}_p(y_j)$ of the privileged coordinates
+        (``math.inf`` where no finite order was found, only when recomputed).
     weights:
         The weights $w_j$ at $p$.
     homogeneous:
@@ -89,7 +91,7 @@ class Certificate:
         Whether every decision above was exact (no numerical zero test).
     """
 
-    orders: tuple[int, ...]
+    orders: tuple[int | float, ...]
     weights: tuple[int, ...]
     homogeneous: bool
     nilpotent_step: int | None
@@ -148,6 +150,17 @@ class Certificate:
             f"all decisions exact: {self.exact}",
         ]
         return "\n".join(lines)
+
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """Each check, computed and expected values, verdict as LaTeX (``align*``)."""
+        return typeset.certificate_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return typeset.certificate_display(self).html()
 
 
 @dataclass(frozen=True)
@@ -287,17 +300,16 @@ class NilpotentApproximation:
         }
         return payload
 
+    # --- display (nilpotent.typeset) -------------------------------------------------
     def to_latex(self) -> str:
-        """The coordinates and both forms of the fields as a LaTeX ``align*`` block."""
-        coords = self.coordinates
-        rows = []
-        for y, e in zip(coords.names, coords.forward, strict=True):
-            rows.append(f"{sp.latex(y)} &= {sp.latex(e)}")
-        for i, f in enumerate(self.fields, start=1):
-            rows.append(rf"\hat X_{{{i}}} &= {_latex_field(f, coords.names)}")
-        for i, f in enumerate(self.fields_x, start=1):
-            rows.append(rf"[\hat X_{{{i}}}]_x &= {_latex_field(f, self.system.coordinates)}")
-        return "\\begin{align*}\n" + " \\\\\n".join(rows) + "\n\\end{align*}"
+        """Coordinates, both forms of the fields and the certificate as LaTeX (``align*``)."""
+        return typeset.approximation_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return typeset.approximation_display(self).html()
 
 
 def _field_lines(fields: Sequence[Sequence[sp.Expr]], coords: Sequence[sp.Symbol]) -> list[str]:
@@ -316,21 +328,6 @@ def _field_lines(fields: Sequence[Sequence[sp.Expr]], coords: Sequence[sp.Symbol
                 text = ("−" if negative else "") + term
         out.append(f"  X̂{i} = " + (text or "0"))
     return out
-
-
-def _latex_field(f: Sequence[sp.Expr], coords: Sequence[sp.Symbol]) -> str:
-    terms = []
-    for e, c in zip(f, coords, strict=True):
-        if e == 0:
-            continue
-        d = rf"\partial_{{{sp.latex(c)}}}"
-        if e == 1:
-            terms.append(d)
-        elif isinstance(e, sp.Add):
-            terms.append(rf"\left({sp.latex(e)}\right){d}")
-        else:
-            terms.append(f"{sp.latex(e)}\\,{d}")
-    return " + ".join(terms) if terms else "0"
 
 
 # --- certificate ------------------------------------------------------------------------

@@ -16,11 +16,18 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from fractions import Fraction
+from typing import Any, TypeAlias
 
 import flint
 import symengine as se
 import sympy as sp
 from flint import arb, fmpq
+
+from nilpotent.core.expressions import as_expr
+
+#: A value of :class:`Evaluator`: an exact ``fmpq`` (exact mode) or an ``arb`` ball.
+#: python-flint's stubs do not describe arithmetic mixing the two, hence ``Any``.
+Scalar: TypeAlias = Any
 
 __all__ = [
     "START_PRECISION_BITS",
@@ -54,7 +61,7 @@ class Inaccurate(Exception):
 # --- decimals ---------------------------------------------------------------------------
 
 
-def _decimal_rational(f: float | sp.Float) -> sp.Rational:
+def _decimal_rational(f: float | sp.Float) -> sp.Expr:
     """The exact rational a decimal denotes: the shortest decimal that reads back as the float."""
     if isinstance(f, sp.Float) and f._prec != 53:
         return sp.Rational(str(f))
@@ -72,11 +79,11 @@ def exact_decimals(expr: object) -> sp.Expr:
     >>> exact_decimals(sp.Float(0.7) * sp.Symbol("x"))
     7*x/10
     """
-    e = sp.S(expr)
+    e = as_expr(expr)
     floats = e.atoms(sp.Float)
     if not floats:
         return e
-    return e.xreplace({f: _decimal_rational(f) for f in floats})
+    return as_expr(e.xreplace({f: _decimal_rational(f) for f in floats}))
 
 
 # --- evaluation of constant expressions ---------------------------------------------------
@@ -147,9 +154,9 @@ class Evaluator:
         self.env = env
         self.exact = exact
         self.direction = direction or {}
-        self._memo: dict[se.Basic, tuple[object, object]] = {}
+        self._memo: dict[se.Basic, tuple[Scalar, Scalar]] = {}
 
-    def _num(self, e: se.Basic) -> object:
+    def _num(self, e: se.Basic) -> Scalar:
         if isinstance(e, se.Integer):
             return fmpq(int(e)) if self.exact else arb(int(e))
         if isinstance(e, se.Rational):
@@ -168,7 +175,7 @@ class Evaluator:
             return arb.const_e()
         raise NotEvaluable(f"cannot evaluate the number {e}")
 
-    def dual(self, e: se.Basic) -> tuple[object, object]:
+    def dual(self, e: se.Basic) -> tuple[Scalar, Scalar]:
         """Value and directional derivative of ``e``."""
         hit = self._memo.get(e)
         if hit is not None:
@@ -177,14 +184,14 @@ class Evaluator:
         self._memo[e] = out
         return out
 
-    def value(self, e: se.Basic) -> object:
+    def value(self, e: se.Basic) -> Scalar:
         """Value of ``e``."""
         return self.dual(e)[0]
 
-    def _zero(self) -> object:
+    def _zero(self) -> Scalar:
         return fmpq(0) if self.exact else arb(0)
 
-    def _dual(self, e: se.Basic) -> tuple[object, object]:
+    def _dual(self, e: se.Basic) -> tuple[Scalar, Scalar]:
         if e.is_Symbol:
             if e not in self.env:
                 raise NotEvaluable(f"no value for {e}")

@@ -41,6 +41,7 @@ from collections.abc import Callable, Mapping, Sequence
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
+from nilpotent.core.linear_printer import print_linear
 from nilpotent.errors import ComputationLimitError, ExpressionError
 
 __all__ = [
@@ -51,6 +52,7 @@ __all__ = [
     "MAX_EXPONENT",
     "MAX_LENGTH",
     "RESERVED_NAMES",
+    "as_expr",
     "format_expression",
     "parse_expression",
     "real_value",
@@ -184,7 +186,7 @@ class _Parser:
         if isinstance(node, ast.UnaryOp):
             operand = self.build(node.operand, depth + 1)
             if isinstance(node.op, ast.USub):
-                return self.checked_call(operator.neg, (operand,), node)
+                return self.checked_call(_negative, (operand,), node)
             if isinstance(node.op, ast.UAdd):
                 return operand
             raise self.fail(f"{_REFUSED_OPERATORS.get(type(node.op), 'this operator')} "
@@ -219,7 +221,10 @@ class _Parser:
         if ident in FUNCTIONS:
             raise self.fail(f"{ident!r} is a function: call it, as in {ident}(x)", node)
         if ident in self.names:
-            return self.names[ident]
+            value = self.names[ident]
+            if not isinstance(value, sp.Expr):
+                raise self.fail(f"the name {ident!r} does not stand for a scalar", node)
+            return value
         raise self.fail(f"unknown name {ident!r}", None, self.allowed_names())
 
     def binary_chain(self, node: ast.BinOp, depth: int) -> sp.Expr:
@@ -258,12 +263,16 @@ class _Parser:
                     "in magnitude)", node)
             if base.is_zero and exponent.is_negative:
                 raise self.fail("division by zero (0 to a negative power)", node)
-            if base.is_Rational:
+            if isinstance(base, sp.Rational):
                 bits = max(int(base.p).bit_length(), int(base.q).bit_length())
                 if bits * abs(float(exponent)) > MAX_BITS:
                     raise self.fail(f"power too large (more than {MAX_BITS} bits)", node)
         result = self.checked_call(sp.Pow, (base, exponent), node)
-        if result.is_Pow and result.exp.is_Number and abs(result.exp) > MAX_EXPONENT:
+        if (
+            isinstance(result, sp.Pow)
+            and isinstance(result.exp, sp.Number)
+            and abs(result.exp) > MAX_EXPONENT
+        ):
             raise self.fail(
                 f"combined exponent {_shorten(str(result.exp))} too large (at most "
                 f"{MAX_EXPONENT} in magnitude)", node)
@@ -309,7 +318,7 @@ class _Parser:
         sympy may move numbers around while evaluating (``exp(710.0 + x)`` becomes
         ``exp(710.0)*exp(x)``), so the whole result is inspected, not only its head.
         """
-        stack = [value]
+        stack: list[sp.Basic] = [value]
         while stack:
             part = stack.pop()
             if part in self.seen:  # subtrees already checked (operands) are skipped
@@ -320,10 +329,10 @@ class _Parser:
                 raise self.fail("undefined or infinite value", node)
             if part is sp.I:
                 raise self.fail("complex value (expressions must be real)", node)
-            if part.is_Float and not math.isfinite(float(part)):
+            if isinstance(part, sp.Float) and not math.isfinite(float(part)):
                 raise self.fail("number too large (outside the range of a double)", node)
-            if part.is_Rational and max(int(part.p).bit_length(),
-                                        int(part.q).bit_length()) > MAX_BITS:
+            if isinstance(part, sp.Rational) and max(int(part.p).bit_length(),
+                                                     int(part.q).bit_length()) > MAX_BITS:
                 raise self.fail(f"exact number too large (more than {MAX_BITS} bits)", node)
         return value
 
@@ -431,10 +440,10 @@ def expanded_terms(expr: sp.Basic) -> int:
             value = sum(count(a) for a in e.args)
         elif e.is_Mul:
             value = math.prod(count(a) for a in e.args)
-        elif e.is_Pow:
+        elif isinstance(e, sp.Pow):
             k = count(e.base)
             x = e.exp
-            if x.is_Integer and k > 1:
+            if isinstance(x, sp.Integer) and k > 1:
                 n = abs(int(x))
                 value = math.comb(k + n - 1, n) if n < 10_000 else cap
             else:
@@ -465,7 +474,7 @@ _PRINTER = _GrammarPrinter({"order": None})
 
 
 SMALL_EXPRESSION_NODES = 2_000
-"""Expressions with more nodes are printed by the linear-time printer (:func:`_print_fast`)."""
+"""Expressions with more nodes are printed by the linear-time printer (``print_linear``)."""
 
 
 def _check_printable(expr: sp.Basic) -> int:
@@ -503,65 +512,6 @@ def _check_printable(expr: sp.Basic) -> int:
                 f"cannot write {expr} in the expression grammar: {type(node).__name__} "
                 f"({node})")
     return nodes
-
-
-def _print_fast(e: sp.Basic) -> str:
-    """Text of the grammar for ``e`` in time linear in its size (terms in stored order).
-
-    sympy's printer sorts the terms of every sum and computes precedences
-    through the assumptions system, quadratic in practice on polynomials of
-    thousands of terms; this walks the tree once.  The text parses back to an
-    equal expression.
-    """
-    if isinstance(e, sp.Float):
-        return repr(float(e))
-    if isinstance(e, sp.Integer):
-        return str(int(e))
-    if isinstance(e, sp.Rational):
-        return f"{e.p}/{e.q}"
-    if isinstance(e, sp.Symbol):
-        return e.name
-    if e is sp.pi:
-        return "pi"
-    if e is sp.E:
-        return "E"
-    if isinstance(e, sp.Add):
-        out = []
-        for k, a in enumerate(e.args):
-            t = _print_fast(a)
-            if k == 0:
-                out.append(t)
-            elif t.startswith("-"):
-                out.append(" - " + t[1:])
-            else:
-                out.append(" + " + t)
-        return "".join(out)
-    if isinstance(e, sp.Mul):
-        parts = []
-        for k, a in enumerate(e.args):
-            t = _print_fast(a)
-            if k == 0 and a == -1 and len(e.args) > 1:
-                parts.append("-")
-                continue
-            if isinstance(a, sp.Add) or (k > 0 and t.startswith("-")):
-                t = f"({t})"
-            parts.append(t)
-        head = parts[0] if parts[0] == "-" else None
-        body = "*".join(parts[1:] if head else parts)
-        return f"-{body}" if head else body
-    if isinstance(e, sp.Pow):
-        base, ex = e.args
-        b = _print_fast(base)
-        if not (isinstance(base, sp.Symbol | sp.Function) or base in (sp.pi, sp.E)
-                or (isinstance(base, sp.Integer) and base > 0)):
-            b = f"({b})"
-        x = _print_fast(ex)
-        if not (isinstance(ex, sp.Integer) and ex >= 0):
-            x = f"({x})"
-        return f"{b}**{x}"
-    if isinstance(e, sp.Function):
-        return f"{_PRINTABLE_FUNCTIONS[e.func]}({', '.join(_print_fast(a) for a in e.args)})"
-    raise ExpressionError(f"cannot write {type(e).__name__} in the expression grammar")
 
 
 def format_expression(expr: sp.Basic | int | float) -> str:
@@ -602,7 +552,7 @@ def format_expression(expr: sp.Basic | int | float) -> str:
     nodes = _check_printable(expr)
     try:
         if nodes > SMALL_EXPRESSION_NODES:
-            return _print_fast(expr)
+            return print_linear(expr, _PRINTABLE_FUNCTIONS)
         return _PRINTER.doprint(expr)
     except ValueError as exc:  # an integer past Python's 4300-digit int-to-str limit
         if "digits" not in str(exc):
@@ -628,10 +578,37 @@ _FLOAT_FUNCTIONS: dict[type, Callable[..., float]] = {
 }
 
 
+def _negative(value: sp.Expr) -> sp.Expr:
+    return -value
+
+
+def as_expr(value: object) -> sp.Expr:
+    """A number or sympy expression built by the program as a scalar sympy expression.
+
+    Never for user text, which goes through :func:`parse_expression`.
+
+    Parameters
+    ----------
+    value : int, float, fractions.Fraction or sympy expression
+        The value.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is text, or is not a scalar (a matrix, a set, a boolean, ...).
+    """
+    if isinstance(value, str):
+        raise TypeError(f"as_expr does not read text ({value!r}): use parse_expression")
+    expr = sp.sympify(value)
+    if not isinstance(expr, sp.Expr):
+        raise TypeError(f"{value!r} is not a scalar expression")
+    return expr
+
+
 def _float_value(expr: sp.Basic) -> float:
-    if expr.is_Integer or expr.is_Rational:
+    if isinstance(expr, sp.Rational):
         return int(expr.p) / int(expr.q)
-    if expr.is_Float:
+    if isinstance(expr, sp.Float):
         return float(expr)
     if expr is sp.pi:
         return math.pi
@@ -641,7 +618,7 @@ def _float_value(expr: sp.Basic) -> float:
         return math.fsum(_float_value(a) for a in expr.args)
     if expr.is_Mul:
         return math.prod(_float_value(a) for a in expr.args)
-    if expr.is_Pow:
+    if isinstance(expr, sp.Pow):
         return math.pow(_float_value(expr.base), _float_value(expr.exp))
     if isinstance(expr, sp.Function) and expr.func in _FLOAT_FUNCTIONS:
         return _FLOAT_FUNCTIONS[expr.func](*(_float_value(a) for a in expr.args))

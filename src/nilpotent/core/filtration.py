@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from nilpotent import typeset
 from nilpotent.core.brackets import (
     Word,
     format_word,
@@ -48,6 +49,7 @@ from nilpotent.core.brackets import (
     word_length,
     word_values_at,
 )
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.orbit import ORBIT_TIME_BUDGET, OrbitCertificate, certify_by_orbit
 from nilpotent.core.spans import (
     START_PRECISION_BITS,
@@ -151,6 +153,17 @@ class Filtration:
     def frame_names(self) -> tuple[str, ...]:
         """The frame words as users write them (``"[X1,X2]"``)."""
         return tuple(format_word(w) for w in self.frame)
+
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """Growth vector, weights and the adapted frame (a table) as LaTeX (``align*``)."""
+        return typeset.filtration_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return typeset.filtration_display(self).html()
 
     def to_json(self) -> dict[str, object]:
         """The ``nilpotent/analysis@1`` JSON object (``INTERFACE.md``).
@@ -325,7 +338,7 @@ def _normalise_point(
     sys: ControlSystem, point: Sequence[object] | Mapping[str, object] | None
 ) -> tuple[sp.Expr, ...]:
     """The point as exact sympy numbers (decimals read as the rationals they denote)."""
-    extra = set().union(*(sp.S(e).free_symbols for f in sys.specialized_fields for e in f))
+    extra = set().union(*(as_expr(e).free_symbols for f in sys.specialized_fields for e in f))
     extra -= set(sys.coordinates)
     if extra:
         raise ModelError(

@@ -315,7 +315,7 @@ def system_from_dict(
             raise ModelError(
                 f"{source}: {label} must be a table of COORDINATE = expression, got {_show(raw)}"
             )
-        components = dict.fromkeys(coord_names, sp.Integer(0))
+        components: dict[str, sp.Expr] = dict.fromkeys(coord_names, sp.Integer(0))
         for key, value in raw.items():
             if key not in seen:
                 raise ModelError(

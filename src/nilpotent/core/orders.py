@@ -23,6 +23,7 @@ from nilpotent.core.brackets import (
     to_symengine,
     word_field_symengine,
 )
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 
@@ -41,7 +42,7 @@ def _is_zero(value: se.Basic) -> bool:
     """
     if value == 0:
         return True
-    v = sp.S(value)
+    v = as_expr(value)
     if v.is_Rational:
         return False
     if v.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
@@ -60,7 +61,7 @@ def _point_subs(sys: ControlSystem, point: Sequence[object] | None) -> dict:
         return {x: se.Integer(0) for x in coords}
     if len(point) != sys.n:
         raise PointError(f"a point of {sys.name!r} has {sys.n} coordinates, got {len(point)}")
-    return {x: to_symengine(sp.S(v)) for x, v in zip(coords, point, strict=True)}
+    return {x: to_symengine(as_expr(v)) for x, v in zip(coords, point, strict=True)}
 
 
 def function_order(
@@ -89,6 +90,14 @@ def function_order(
         The order, or ``math.inf`` if every derivative of length $\\le$
         ``max_order`` vanishes at the point (also when they vanish identically).
 
+    Raises
+    ------
+    OptionError
+        If ``max_order`` is negative.
+    PointError
+        If the point has the wrong number of coordinates, or a derivative is
+        undefined there.
+
     Examples
     --------
     >>> x, y, th = sp.symbols("x y theta")
@@ -102,7 +111,7 @@ def function_order(
         raise OptionError(f"max_order must be >= 0, got {max_order}")
     subs = _point_subs(sys, point)
     params = {se.Symbol(k): to_symengine(v) for k, v in sys.parameters}
-    g = se.expand(to_symengine(sp.S(f)))
+    g = se.expand(to_symengine(as_expr(f)))
     if params:
         g = se.expand(g.subs(params))
     coords = se_coordinates(sys)
@@ -128,7 +137,7 @@ def function_order(
 
 def weighted_order(
     expr: sp.Expr,
-    names: Sequence[sp.Symbol],
+    names: Sequence[sp.Expr],
     weights: Sequence[int],
     max_order: int = 30,
 ) -> Order:
@@ -150,7 +159,7 @@ def weighted_order(
     """
     if len(names) != len(weights):
         raise OptionError(f"{len(names)} names but {len(weights)} weights")
-    e = sp.S(expr)
+    e = as_expr(expr)
     if e == 0:
         return math.inf
     if e.is_polynomial(*names):
@@ -171,7 +180,7 @@ def weighted_order(
 def field_order(
     components_in_privileged: Sequence[sp.Expr | sp.Poly],
     weights: Sequence[int],
-    names: Sequence[sp.Symbol] | None = None,
+    names: Sequence[sp.Expr] | None = None,
 ) -> Order:
     """Non-holonomic order of a vector field given in privileged coordinates.
 

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from nilpotent.core.expressions import as_expr
 from nilpotent.errors import ModelError
 
 __all__ = ["Limits", "Outline"]
@@ -34,6 +35,12 @@ Point2 = tuple[sp.Expr, sp.Expr]
 @dataclass(frozen=True)
 class Limits:
     """Closed intervals on coordinates: ``bounds`` is ``((name, lo, hi), ...)``.
+
+    Attributes
+    ----------
+    bounds:
+        ``(name, lo, hi)`` per limited coordinate: ``lo ≤ name ≤ hi`` (model
+        units, radians for angles).
 
     Raises
     ------
@@ -110,6 +117,11 @@ class Outline:
 
     The symbols are the model's coordinates and parameters (as
     ``sympy.Symbol(name)``).
+
+    Raises
+    ------
+    ModelError
+        A polygon with fewer than 3 points, or an empty outline.
     """
 
     polygons: tuple[tuple[Point2, ...], ...] = ()
@@ -137,4 +149,4 @@ class Outline:
 
     def free_names(self) -> set[str]:
         """Names of the symbols the outline uses."""
-        return {str(s) for e in self.expressions() for s in sp.S(e).free_symbols}
+        return {str(s) for e in self.expressions() for s in as_expr(e).free_symbols}

@@ -124,7 +124,7 @@ def parse_point(text: str, sys: ControlSystem, *, option: str = "--at") -> tuple
     """
     names = sys.coordinate_names
     example = f"{option} {names[0]}=1/2" + (f",{names[-1]}=pi/4" if len(names) > 1 else "")
-    values = dict.fromkeys(names, sp.Integer(0))
+    values: dict[str, sp.Expr] = dict.fromkeys(names, sp.Integer(0))
     for name, expr in _assignments(text, option, PointError, example):
         if name not in values:
             raise PointError(

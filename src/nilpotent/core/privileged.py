@@ -65,7 +65,9 @@ from dataclasses import dataclass, field
 import symengine as se
 import sympy as sp
 
+from nilpotent import typeset
 from nilpotent.core.brackets import word_field_symengine
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.filtration import Filtration, analyze
 from nilpotent.core.spans import to_double
 from nilpotent.core.system import ControlSystem
@@ -125,6 +127,12 @@ class PrivilegedCoordinates:
         $B$, column $k$ is $Y_{k+1}(p)$ (so $\partial_{z_k}|_p = Y_{k+1}(p)$).
     linear_part:
         $A = B^{-1}$ ($z = A(x - p)$, the linear adapted coordinates).
+    forward_poly:
+        $y_j$ as :class:`~nilpotent.core.taylor.Poly` in the linear adapted
+        coordinates $z$ (the exact form of ``forward``).
+    inverse_poly:
+        $z_k$ as :class:`~nilpotent.core.taylor.Poly` in $y$ (the exact form of
+        ``inverse``, before $x = p + Bz$).
     """
 
     method: str
@@ -188,12 +196,12 @@ class PrivilegedCoordinates:
 
     def to_y(self, x: Sequence[object]) -> tuple[sp.Expr, ...]:
         """Privileged coordinates of a point given in model coordinates."""
-        subs = dict(zip(self.system.coordinates, (sp.S(v) for v in x), strict=True))
+        subs = dict(zip(self.system.coordinates, (as_expr(v) for v in x), strict=True))
         return tuple(sp.expand(e.xreplace(subs)) for e in self.forward)
 
     def to_x(self, y: Sequence[object]) -> tuple[sp.Expr, ...]:
         """Model coordinates of a point given in these coordinates (through ``inverse``)."""
-        subs = dict(zip(self.names, (sp.S(v) for v in y), strict=True))
+        subs = dict(zip(self.names, (as_expr(v) for v in y), strict=True))
         return tuple(sp.expand(e.xreplace(subs)) for e in self.inverse)
 
     def __str__(self) -> str:
@@ -209,6 +217,17 @@ class PrivilegedCoordinates:
         for x, e in zip(self.system.coordinates, self.inverse, strict=True):
             lines.append(f"  {x} = {e}")
         return "\n".join(lines)
+
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """The change of coordinates, weights and computed orders as LaTeX (``align*``)."""
+        return typeset.privileged_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return typeset.privileged_display(self).html()
 
 
 # --- shared context ----------------------------------------------------------------
@@ -767,6 +786,7 @@ def privileged_coordinates(
         name = method
         built = METHODS[method](ctx)
         orders, jets = _certified_orders(ctx, built[0], built[1])
+    assert orders is not None  # only quick=True returns None, and it was redone above
     bad = [(j, o, wj) for j, (o, wj) in enumerate(zip(orders, f.weights, strict=True)) if o != wj]
     names = coordinate_names(sys)
     if bad:

@@ -38,6 +38,7 @@ from nilpotent.core.brackets import (
     word_field_symengine,
     word_length,
 )
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, NotBracketGeneratingError
 
@@ -161,7 +162,7 @@ def trig_normal_form(expr: sp.Expr, coords: Sequence[sp.Symbol]) -> sp.Expr:
         pairs.append((c, s))
     e2 = e.xreplace(sym)
     if any(f.has(*coords) for f in e2.atoms(sp.Function)) or not sym:
-        return sp.factor(sp.cancel(expr))
+        return as_expr(sp.factor(sp.cancel(expr)))
     num, den = sp.fraction(sp.cancel(sp.together(e2)))
 
     def reduce(p: sp.Expr) -> sp.Expr:
@@ -178,7 +179,8 @@ def trig_normal_form(expr: sp.Expr, coords: Sequence[sp.Symbol]) -> sp.Expr:
         return p
 
     back = {v: k for k, v in sym.items()}
-    out = sp.factor(sp.cancel(reduce(num).xreplace(back) / reduce(den).xreplace(back)))
+    ratio = as_expr(reduce(num).xreplace(back)) / as_expr(reduce(den).xreplace(back))
+    out = as_expr(sp.factor(sp.cancel(ratio)))
     return _compact(out)
 
 
@@ -198,11 +200,11 @@ def _equation(det: sp.Expr) -> sp.Expr | None:
     """The numerator of ``det`` without constant factors (None if ``det`` is a constant)."""
     if det.is_number:
         return None
-    num = sp.factor(sp.fraction(sp.factor(det))[0])
+    num = as_expr(sp.factor(sp.fraction(sp.factor(det))[0]))
     parts = [
         b
         for f in sp.Mul.make_args(num)
-        for b in [f.base if f.is_Pow and f.exp.is_positive else f]
+        for b in [f.base if isinstance(f, sp.Pow) and f.exp.is_positive else f]
         if not b.is_number
     ]
     if not parts:
@@ -291,17 +293,18 @@ def invariant_hypersurface(
     """
     coords = sys.coordinates
     fields = sys.specialized_fields
-    rational = all(sp.S(e).is_rational_function(*coords) for f in fields for e in f)
+    rational = all(as_expr(e).is_rational_function(*coords) for f in fields for e in f)
     try:
         locus = singular_set(sys, generic)
     except (ComputationLimitError, NotBracketGeneratingError):
         return None
     at = dict(zip(coords, point, strict=True))
+    at_pairs = list(at.items())
     for g in locus.equations:
-        if len(str(g)) > 2_000 or sp.simplify(g.subs(at)) != 0:
+        if len(str(g)) > 2_000 or sp.simplify(g.subs(at_pairs)) != 0:
             continue
         grad = [sp.diff(g, x) for x in coords]
-        moving = [k for k, d in enumerate(grad) if sp.simplify(d.subs(at)) != 0]
+        moving = [k for k, d in enumerate(grad) if sp.simplify(d.subs(at_pairs)) != 0]
         if not moving:
             continue
         derivs = [sp.Add(*[c * d for c, d in zip(f, grad, strict=True)]) for f in fields]
@@ -326,11 +329,11 @@ def _vanishes_on_branch(
     except (NotImplementedError, ValueError):
         return False
     for sol in solutions:
-        if sp.simplify(sol.subs(at) - at[x]) != 0:
+        if sp.simplify(sol.subs(list(at.items())) - at[x]) != 0:
             continue
         for d in derivs:
             value = d.subs(x, sol)
-            if sp.simplify(value) != 0 and trig_normal_form(value, coords) != 0:
+            if sp.simplify(value) != 0 and trig_normal_form(as_expr(value), coords) != 0:
                 return False
         return True
     return False

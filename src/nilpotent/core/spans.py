@@ -154,7 +154,7 @@ class ExprVector(Vector):
         for k, v in self.entries.items():
             if isinstance(v, arb):
                 return None
-            out[k] = exact_decimals(sp.S(v) if not isinstance(v, fmpq) else sp.Rational(
+            out[k] = exact_decimals(v if not isinstance(v, fmpq) else sp.Rational(
                 int(v.p), int(v.q)))
         return out
 

@@ -21,6 +21,8 @@ from functools import cached_property
 
 import sympy as sp
 
+from nilpotent import typeset
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.outline import Limits, Outline
 from nilpotent.errors import ModelError
 
@@ -30,6 +32,9 @@ Expr = sp.Expr
 @dataclass(frozen=True)
 class ControlSystem:
     """A driftless control system given by its vector fields.
+
+    ``limits`` and ``geometry`` do not change the dynamics: they take no part
+    in equality and hashing (systems compare by their fields).
 
     Parameters
     ----------
@@ -51,8 +56,12 @@ class ControlSystem:
         The robot's outline for collision checks
         (:class:`~nilpotent.core.outline.Outline`), or ``None``.
 
-    ``limits`` and ``geometry`` do not change the dynamics: they take no part
-    in equality and hashing (systems compare by their fields).
+    Raises
+    ------
+    ModelError
+        No coordinates, duplicate coordinates, no fields, a field whose number
+        of components is not the number of coordinates, or a name used both as
+        a coordinate and as a parameter.
 
     Examples
     --------
@@ -81,7 +90,7 @@ class ControlSystem:
         if dup:
             raise ModelError(f"model {self.name!r}: duplicate coordinates {', '.join(dup)}")
         # internal values (never user text: that goes through core.expressions)
-        flds = tuple(tuple(sp.S(e) for e in f) for f in self.fields)
+        flds = tuple(tuple(as_expr(e) for e in f) for f in self.fields)
         if not flds:
             raise ModelError(f"model {self.name!r}: no fields")
         for i, f in enumerate(flds, start=1):
@@ -90,7 +99,7 @@ class ControlSystem:
                     f"model {self.name!r}: field X{i} has {len(f)} components, "
                     f"expected {len(coords)} (one per coordinate)"
                 )
-        params = tuple((str(k), sp.S(v)) for k, v in dict(self.parameters).items())
+        params = tuple((str(k), as_expr(v)) for k, v in dict(self.parameters).items())
         clash = set(dict(params)) & set(names)
         if clash:
             raise ModelError(
@@ -142,7 +151,7 @@ class ControlSystem:
                 raise ModelError(
                     f"model {self.name!r} has no parameter {k!r} (parameters: {known})"
                 )
-            current[k] = sp.S(v)  # values are numbers, never user text
+            current[k] = as_expr(v)  # values are numbers, never user text
         return ControlSystem(
             self.name, self.coordinates, self.fields, tuple(current.items()), self.description,
             self.limits, self.geometry,
@@ -159,7 +168,7 @@ class ControlSystem:
         """
         from nilpotent.core.spans import exact_decimals
 
-        subs = {sp.Symbol(k): exact_decimals(v) for k, v in self.parameters}
+        subs = [(sp.Symbol(k), exact_decimals(v)) for k, v in self.parameters]
         return tuple(
             tuple(exact_decimals(e.subs(subs) if subs else e) for e in f) for f in self.fields
         )
@@ -200,8 +209,8 @@ class ControlSystem:
                     f"model {self.name!r} has no coordinate {unknown[0]!r} "
                     f"(coordinates: {', '.join(names)})"
                 )
-            return tuple(sp.S(values.get(k, 0)) for k in names)
-        vals = tuple(sp.S(v) for v in values)
+            return tuple(as_expr(values.get(k, 0)) for k in names)
+        vals = tuple(as_expr(v) for v in values)
         if len(vals) != self.n:
             raise ModelError(f"a point of {self.name!r} has {self.n} coordinates, got {len(vals)}")
         return vals
@@ -212,3 +221,14 @@ class ControlSystem:
             terms = [f"({e})∂{c}" for e, c in zip(f, self.coordinate_names, strict=True) if e != 0]
             lines.append(f"  X{i} = " + (" + ".join(terms) or "0"))
         return "\n".join(lines)
+
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """The fields, coordinates and parameters as LaTeX (``align*``)."""
+        return typeset.system_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return typeset.system_display(self).html()

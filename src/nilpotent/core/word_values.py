@@ -114,7 +114,7 @@ class WordValues:
 
     def _eval(self, word: Word, env: dict, exact: bool, sub) -> list:
         try:
-            if is_built(self.sys, word):
+            if isinstance(word, int) or is_built(self.sys, word):
                 ev = Evaluator(env, exact)
                 return [ev.value(e) for e in word_field_symengine(self.sys, word)]
             u, v = word
@@ -148,7 +148,7 @@ class WordValues:
             return self._sym_se[word]
         env = {x: to_symengine(v) for x, v in zip(self.coords, self.point, strict=True)}
         try:
-            if is_built(self.sys, word):
+            if isinstance(word, int) or is_built(self.sys, word):
                 ev = SymbolicEvaluator(env)
                 out = [ev.value(e) for e in word_field_symengine(self.sys, word)]
             else:

@@ -92,7 +92,7 @@ def _rectangle(px, py, th, behind, ahead, width) -> tuple:
 def car_trailers_outline(coords: tuple[sp.Symbol, ...]) -> Outline:
     """Car and trailer rectangles and hitch bars of ``car-trailers:K`` (module doc)."""
     x, y, *thetas = coords
-    axles = [(x, y)]
+    axles: list[tuple[sp.Expr, sp.Expr]] = [(x, y)]
     for i in range(1, len(thetas)):
         d = sp.Symbol(f"d{i}")
         px, py = axles[-1]

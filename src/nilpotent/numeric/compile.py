@@ -45,6 +45,7 @@ import sympy as sp
 from sympy.printing.numpy import JaxPrinter, NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
+from nilpotent.core.expressions import as_expr
 from nilpotent.errors import MissingExtraError, ModelError, OptionError
 from nilpotent.numeric.cache import content_key, load_generated_module
 
@@ -73,7 +74,7 @@ def _float_constants(expr: sp.Basic) -> sp.Basic:
     exact constants (``sqrt(3)``, ``pi``) out of the generated code.
     """
     if expr.is_Atom:
-        if expr.is_Integer and abs(int(expr)) < _SMALL_INT:
+        if isinstance(expr, sp.Integer) and abs(int(expr)) < _SMALL_INT:
             return expr
         if expr.is_number:
             return _to_float(expr)
@@ -97,9 +98,9 @@ def _split_shifted_trig(expr: sp.Basic) -> sp.Basic:
         return any(a.is_number for a in e.args[0].args)
 
     def rewrite(e: sp.Basic) -> sp.Basic:
-        arg = e.args[0]
-        c = sp.Add(*[a for a in arg.args if a.is_number])
-        z = sp.Add(*[a for a in arg.args if not a.is_number])
+        terms = [as_expr(a) for a in e.args[0].args]
+        c = sp.Add(*[a for a in terms if a.is_number])
+        z = sp.Add(*[a for a in terms if not a.is_number])
         if isinstance(e, sp.sin):
             return sp.sin(z) * sp.cos(c) + sp.cos(z) * sp.sin(c)
         return sp.cos(z) * sp.cos(c) - sp.sin(z) * sp.sin(c)
@@ -134,7 +135,7 @@ class _Prepared:
 def _prepare(fields: tuple[tuple[sp.Expr, ...], ...], n: int) -> _Prepared:
     flat = [fields[i][j] for i in range(len(fields)) for j in range(n)]
     reps, reduced = sp.cse(flat, symbols=sp.numbered_symbols("c"), optimizations="basic")
-    return _Prepared(n, len(fields), tuple(reps), tuple(reduced))
+    return _Prepared(n, len(fields), tuple(reps), tuple(as_expr(e) for e in reduced))
 
 
 @dataclass(frozen=True, eq=False)
@@ -221,7 +222,7 @@ class CompiledSystem:
             raise MissingExtraError(
                 "the JAX backend needs jax: pip install nilpotent[jax]"
             )
-        import jax
+        import jax  # pyright: ignore[reportMissingImports]  (the optional [jax] extra)
 
         module = load_generated_module(
             f"jax_{self.key}", None, lambda: _jax_source(self._prepared, self.name)
@@ -300,6 +301,15 @@ def compile_fields(
         Label for messages and generated files.
     backend:
         One of :data:`BACKENDS`.
+
+    Raises
+    ------
+    OptionError
+        An unknown ``backend``.
+    ModelError
+        A field without one component per coordinate, a free symbol that is
+        neither a coordinate nor given in ``params``, or a constant that is not
+        a real number.
     """
     if backend not in BACKENDS:
         raise OptionError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
@@ -317,7 +327,7 @@ def compile_fields(
     for i, row in enumerate(rows, start=1):
         out = []
         for j, e in enumerate(row):
-            expr = sp.S(e).xreplace(subs) if isinstance(e, sp.Basic) else sp.S(e)
+            expr = as_expr(e).xreplace(subs)
             # second pass: parameters given as plain symbols with assumptions differ
             free = expr.free_symbols - set(qs)
             if free:
@@ -537,7 +547,8 @@ def _jacobian_source(fields: tuple[tuple[sp.Expr, ...], ...], n: int, name: str)
         for j in range(n)
         for k in range(n)
     ]
-    reps, reduced = sp.cse(flat, symbols=sp.numbered_symbols("c"), optimizations="basic")
+    reps, reduced_exprs = sp.cse(flat, symbols=sp.numbered_symbols("c"), optimizations="basic")
+    reduced = [as_expr(e) for e in reduced_exprs]
     printer = NumPyPrinter({"fully_qualified_modules": True})
     m = len(fields)
     lines = [_header("numpy jacobian", name), "import numpy", "", "", "def jacobian(x):"]

@@ -30,6 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from nilpotent.errors import PlanningError
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.triangular import TriangularSystem
 
@@ -208,7 +209,7 @@ def _segment_solution(
 
 
 def endpoint(
-    system: TriangularSystem, y0: Sequence[float], segments: Sequence[Segment]
+    system: TriangularSystem, y0: Sequence[float] | State, segments: Sequence[Segment]
 ) -> np.ndarray:
     """The state reached from ``y0`` under ``segments`` (closed form)."""
     y = np.asarray(y0, dtype=float).reshape(-1, 1)
@@ -220,7 +221,7 @@ def endpoint(
 
 def endpoint_and_jacobian(
     system: TriangularSystem,
-    y0: Sequence[float],
+    y0: Sequence[float] | State,
     segments: Sequence[Segment],
     harmonics: Sequence[int],
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -48,6 +48,7 @@ import numpy as np
 from nilpotent.core.outline import Limits
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import IntegrationError, PlanningError, SingularPointError
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
 from nilpotent.planning.verify import Checker, Verification, verify_segments
@@ -112,6 +113,13 @@ class GlobalPlan:
         ``"direct"`` (one nilpotent plan, no global path needed) or ``"global"``.
     planner_seconds:
         Time spent in OMPL.
+    time_limit:
+        The wall-clock budget the planning was given (seconds; ``inf``: none).
+    seconds:
+        Wall-clock time of the whole planning.
+    clearance_required:
+        The distance robot–obstacles the motion had to exceed (``clearance`` of
+        :func:`plan_global`; model length units).
     """
 
     plan: Plan
@@ -260,8 +268,9 @@ def ompl_path(
         min(0.05, resolution / max(extent, 1e-12))
     )
     start, goal = space.allocState(), space.allocState()
+    # OMPL's stubs type allocState() as the abstract State; a real-vector state is indexable
     for j in range(n):
-        start[j], goal[j] = float(x0[j]), float(xg[j])
+        start[j], goal[j] = float(x0[j]), float(xg[j])  # pyright: ignore[reportIndexIssue]
     setup.setStartAndGoalStates(start, goal)
     setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
     status = setup.solve(float(seconds))
@@ -273,7 +282,8 @@ def ompl_path(
         )
     setup.simplifySolution()
     path = setup.getSolutionPath()
-    pts = [np.array([path.getState(i)[j] for j in range(n)]) for i in range(path.getStateCount())]
+    states = [path.getState(i) for i in range(path.getStateCount())]
+    pts = [np.array([s[j] for j in range(n)]) for s in states]  # pyright: ignore[reportIndexIssue]
     pts[0], pts[-1] = x0.copy(), xg.copy()
     return pts
 
@@ -337,8 +347,8 @@ def steer_admissible(
 
 def plan_global(
     sys: ControlSystem,
-    start: Sequence[object],
-    goal: Sequence[object],
+    start: Sequence[object] | State,
+    goal: Sequence[object] | State,
     tol: float = 1e-8,
     *,
     world: World | None = None,

@@ -37,6 +37,7 @@ import numpy as np
 
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NilpotentError, PlanningError, SingularPointError
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import (
     Segment,
     coefficients,
@@ -117,6 +118,8 @@ class Plan:
         under ``segments`` (samples for plots and animations).
     tol:
         The tolerance asked for; ``converged`` says whether ``error ≤ tol``.
+    converged:
+        Whether ``error ≤ tol`` (computed from them, not an argument).
     anchor, builder:
         Where the approximations were taken and how they were built.
     initial_error:
@@ -186,8 +189,23 @@ class Plan:
             "segments": [s.to_dict() for s in self.segments],
         }
 
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """Start, goal, the point reached and the iterations as LaTeX (``align*``)."""
+        from nilpotent import typeset
 
-def _as_floats(point: Sequence[object], n: int, what: str) -> np.ndarray:
+        return typeset.plan_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        from nilpotent import typeset
+
+        return typeset.plan_display(self).html()
+
+
+def _as_floats(point: Sequence[object] | State, n: int, what: str) -> np.ndarray:
     try:
         arr = np.array([float(v) for v in point], dtype=float)  # type: ignore[arg-type]
     except (TypeError, ValueError):
@@ -362,8 +380,8 @@ def _refine(
 
 def plan(
     sys: ControlSystem,
-    start: Sequence[object],
-    goal: Sequence[object],
+    start: Sequence[object] | State,
+    goal: Sequence[object] | State,
     tol: float = 1e-8,
     *,
     max_iterations: int = 30,

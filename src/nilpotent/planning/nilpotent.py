@@ -52,6 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nilpotent.errors import PlanningError
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import (
     InputSignal,
     Segment,
@@ -282,8 +283,8 @@ _NEGLIGIBLE_SCALE = 1e-100
 
 def steer_nilpotent(
     system: TriangularSystem,
-    y_start: Sequence[float],
-    y_goal: Sequence[float],
+    y_start: Sequence[float] | State,
+    y_goal: Sequence[float] | State,
     *,
     method: str = "auto",
     seed: int = 0,
@@ -308,6 +309,13 @@ def steer_nilpotent(
         With ``error = ‖reached − goal‖_∞`` from the closed-form flow; a
         :class:`~nilpotent.errors.PlanningError` is raised if the goal is not
         reached to ``1e-12·max(1, ‖goal‖)``.
+
+    Raises
+    ------
+    PlanningError
+        Start or goal of the wrong size, an unknown method, ``"step2"`` for a
+        system of step > 2, or a goal the method does not reach to the
+        tolerance above.
 
     Examples
     --------

@@ -24,6 +24,7 @@ import numpy as np
 import shapely
 import sympy as sp
 
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.outline import Limits, Outline
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import OptionError
@@ -50,8 +51,8 @@ def singular_margin_function(system: ControlSystem) -> Callable[[np.ndarray], np
 
 
 def _lambdify(system: ControlSystem, exprs: tuple[sp.Expr, ...]) -> Callable:
-    subs = {sp.Symbol(k): v for k, v in system.parameters}
-    return sp.lambdify([system.coordinates], [sp.S(e).subs(subs) for e in exprs], "numpy")
+    subs = [(sp.Symbol(k), v) for k, v in system.parameters]
+    return sp.lambdify([system.coordinates], [as_expr(e).subs(subs) for e in exprs], "numpy")
 
 
 @dataclass(frozen=True, eq=False)

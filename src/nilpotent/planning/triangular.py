@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from nilpotent.core.expressions import as_expr
 from nilpotent.errors import PlanningError
 
 Term = tuple[float, tuple[int, ...]]  # (coefficient, exponent of y_1..y_n)
@@ -114,7 +115,7 @@ class TriangularSystem:
         for i, comps in enumerate(fields):
             row = []
             for j, expr in enumerate(comps):
-                e = sp.expand(sp.S(expr))
+                e = sp.expand(as_expr(expr))
                 if e == 0:
                     row.append(())
                     continue

@@ -22,6 +22,7 @@ import numpy as np
 from nilpotent.core.outline import Limits
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import OptionError
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.robot import Robot, singular_margin_function
 from nilpotent.planning.simulation import simulate_path
@@ -142,7 +143,7 @@ class Checker:
                 )
         return bool(np.all(self.valid(q, extra, slack)))
 
-    def why_invalid(self, q: Sequence[float]) -> str:
+    def why_invalid(self, q: Sequence[float] | State) -> str:
         """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""
         clear, lim, sing = (float(v[0]) for v in self.measures(np.asarray(q)[None, :]))
         reasons = []
@@ -196,7 +197,7 @@ class Verification:
 
 
 def verify_states(
-    checker: Checker, times: np.ndarray, states: np.ndarray, goal: Sequence[float]
+    checker: Checker, times: np.ndarray, states: np.ndarray, goal: Sequence[float] | State
 ) -> Verification:
     """Measure sampled states ``(N, n)`` against ``checker`` (see :class:`Verification`)."""
     clear, lim, sing = checker.measures(states)
@@ -219,9 +220,9 @@ def verify_states(
 
 def verify_segments(
     checker: Checker,
-    start: Sequence[float],
+    start: Sequence[float] | State,
     segments: Sequence[Segment],
-    goal: Sequence[float],
+    goal: Sequence[float] | State,
     points_per_segment: int = 200,
     engine: str = "auto",
 ) -> Verification:

@@ -58,6 +58,11 @@ class World:
         Obstacle polygons, each ``((x, y), ...)``.
     discs:
         Obstacle discs ``((cx, cy), radius)``.
+
+    Raises
+    ------
+    WorldError
+        An obstacle polygon that is not simple.
     """
 
     name: str

@@ -3,57 +3,78 @@
 :func:`build_page` turns the results of :mod:`nilpotent.report.pipeline` into
 the HTML of ``index.html`` with the building blocks of
 :mod:`nilpotent.report.page`.  Every number shown is also written under
-``data/`` by the pipeline; formulas are printed in the expression grammar
-(``sqrt(3)/2``, ``∂x4`` for the coordinate field ``∂/∂x4``).
+``data/`` by the pipeline.  Every field, coordinate change, bracket and
+matrix is typeset (MathML from the LaTeX of :mod:`nilpotent.typeset`, the
+LaTeX kept for copying); the audit shows the paper's own LaTeX typeset the same
+way where it is a formula, and its computed side in the expression grammar.
 """
 
 from __future__ import annotations
 
 import html
+import re
+from collections.abc import Sequence
 from typing import Any
 
 import sympy as sp
 
+from nilpotent.core.expressions import parse_expression
+from nilpotent.errors import NilpotentError
 from nilpotent.models.trident import BODY_LEG_ANGLES, PAPER_LEG_ANGLES
-from nilpotent.report.audit import Audit, format_field
-from nilpotent.report.page import animation, code, figure, page, table
+from nilpotent.report.audit import Audit
+from nilpotent.report.latexmath import PARTIAL_PREFIX
+from nilpotent.report.page import animation, code, figure, formula, page, table
 from nilpotent.report.reproduction_data import PageFigures, ReproductionData
+from nilpotent.typeset import expr_latex, field_latex, matrix_latex, word_latex
 
 __all__ = ["build_page"]
 
 
-def _fmt(value: Any) -> str:
-    from nilpotent.core.expressions import format_expression
-
-    return format_expression(sp.S(value))
-
-
-def _angles(values: Any) -> str:
-    return ", ".join(_fmt(v) for v in values)
+def _angles_latex(values: Any) -> str:
+    return r"\left(" + ", ".join(expr_latex(v) for v in values) + r"\right)"
 
 
 def _fig(stem: str, caption: str) -> str:
     return figure(f"figures/{stem}.png", caption, links=(("SVG", f"figures/{stem}.svg"),))
 
 
-def _fields_table(system, fields, coords, names: str = "X") -> str:
-    rows = [(f"{names}{i}", format_field(f, coords)) for i, f in enumerate(fields, start=1)]
-    return table(("field", "components"), rows, cell_classes=("", "mono"))
+def _fields_table(fields, coords, name: str = "X") -> str:
+    """The fields ``name_i = Σ_j a_ij ∂_{x_j}``, typeset; ``name`` is LaTeX (``\\hat X``)."""
+    rows = [
+        (formula(f"{name}_{{{i}}}"), formula(field_latex(f, coords)))
+        for i, f in enumerate(fields, start=1)
+    ]
+    return table(("field", "components"), rows, raw_columns=(0, 1), widths=("8%", "92%"))
+
+
+def _tuple(values: Any) -> str:
+    return formula(r"\left(" + ", ".join(expr_latex(v) for v in values) + r"\right)")
+
+
+_REGULARITY = {True: "regular point", False: "singular point"}
 
 
 def _analysis_block(label: str, system, filt) -> str:
-    from nilpotent.core.brackets import format_word
 
     rows = [
-        (j + 1, filt.weights[j], format_word(w), format_field(v, system.coordinates))
+        (
+            j + 1,
+            filt.weights[j],
+            formula(f"Y_{{{j + 1}}} = " + word_latex(w)),
+            formula(field_latex(v, system.coordinates)),
+        )
         for j, (w, v) in enumerate(zip(filt.frame, filt.frame_values, strict=True))
     ]
     return (
-        f"<h3>{label}</h3><p>growth vector {code(str(filt.growth_vector))}, weights "
-        f"{code(str(filt.weights))}, step {filt.step}, "
-        f"{'regular' if filt.regular else 'singular'} point; adapted frame at 0:</p>"
+        f"<h3>{label}</h3><p>growth vector {_tuple(filt.growth_vector)}, weights "
+        f"{_tuple(filt.weights)}, step {filt.step}, "
+        f"{_REGULARITY.get(filt.regular, 'regularity undetermined')}; adapted frame at 0:</p>"
         + table(
-            ("j", "weight", "word", "value at 0"), rows, cell_classes=("num", "num", "mono", "mono")
+            ("j", "weight", "word", "value at 0"),
+            rows,
+            cell_classes=("num", "num", "", ""),
+            raw_columns=(2, 3),
+            widths=("4%", "7%", "22%", "67%"),
         )
     )
 
@@ -61,15 +82,24 @@ def _analysis_block(label: str, system, filt) -> str:
 def _privileged_block(label: str, system, approx) -> str:
     coords = approx.coordinates
     rows = [
-        (str(y), w, _fmt(e), o)
+        (formula(sp.latex(y)), w, formula(f"{sp.latex(y)} = {expr_latex(e)}"), o)
         for y, w, e, o in zip(
             coords.names, approx.weights, coords.forward, coords.orders, strict=True
         )
     ]
     cert = approx.certificate
+    matrix = ""
+    if coords.linear_part is not None:
+        matrix = (
+            "<p>The linear part, the matrix inverse of the frame at 0 "
+            f"(columns {formula('Y_j(0)')}), so that {formula('z = A(x - p)')}:</p>"
+            + formula(rf"A = B^{{-1}} = {matrix_latex(coords.linear_part)}", display=True)
+        )
     return (
         f"<h3>{label}</h3><p>method {code(coords.method)} (linear adapted: "
-        "∂/∂y_j at 0 is the frame's Y_j(0)); the orders are computed, not assumed.</p>"
+        + formula(r"\partial_{y_j}")
+        + f" at 0 is the frame's {formula('Y_j(0)')}); "
+        "the orders are computed, not assumed.</p>"
         + table(
             (
                 "y_j",
@@ -78,15 +108,24 @@ def _privileged_block(label: str, system, approx) -> str:
                 "computed ord_0(y_j)",
             ),
             rows,
-            cell_classes=("mono", "num", "mono", "num"),
+            cell_classes=("", "num", "", "num"),
+            raw_columns=(0, 2),
+            widths=("6%", "9%", "70%", "15%"),
         )
-        + "<p>Nilpotent approximation in y (terms of weighted degree w_j − 1):</p>"
-        + _fields_table(system, approx.fields, coords.names, "X̂")
+        + matrix
+        + "<p>Nilpotent approximation in y (terms of weighted degree "
+        f"{formula('w_j - 1')}):</p>"
+        + _fields_table(approx.fields, coords.names, r"\hat X")
         + "<p>The same fields in the model coordinates:</p>"
-        + _fields_table(system, approx.fields_x, system.coordinates, "X̂")
+        + _fields_table(approx.fields_x, system.coordinates, r"\hat X")
         + f"<p>Certificate: homogeneous {cert.homogeneous}, nilpotent of step "
-        f"{cert.nilpotent_step}, growth vector of X̂ at 0 {cert.growth_vector_at_0}, "
-        f"X − X̂ of order ≥ 0: {cert.remainder_order_ok}.</p>"
+        f"{cert.nilpotent_step}, growth vector of "
+        + formula(r"\hat X")
+        + f" at 0 {_tuple(cert.growth_vector_at_0)}, "
+        + formula(r"X - \hat X")
+        + " of order "
+        + formula(r"\ge 0")
+        + f": {cert.remainder_order_ok}.</p>"
     )
 
 
@@ -102,16 +141,65 @@ def _audit_note(audit: Audit, *ids: str) -> str:
     return f'<div class="note">Audit:<ul>{"".join(items)}</ul></div>'
 
 
-def _audit_table(audit: Audit) -> str:
+_PROSE = re.compile(r"[A-Za-z]{4,}")
+
+
+def _paper_cell(text: str) -> str:
+    """The paper's side of an audit entry: typeset when it is a LaTeX formula, else text.
+
+    A formula is text without ``$`` whose letters outside LaTeX commands form no
+    word of four letters or more (``g_5 = \\sqrt 3\\partial x_5``, not a sentence).
+    """
+    if "$" not in text and not _PROSE.search(re.sub(r"\\[A-Za-z]+", " ", text)):
+        try:
+            return formula(text)
+        except Exception:  # latex2mathml cannot read it: show the source as printed
+            pass
+    return html.escape(text)
+
+
+def _computed_cell(text: str, coordinates: Sequence[sp.Symbol]) -> str:
+    """The computed side of an audit entry: typeset when it is one field or expression.
+
+    The audit prints fields in the expression grammar with ``∂x4`` for the
+    coordinate field; such text is read back with the safe grammar (``∂v`` as a
+    placeholder symbol) and typeset; any other text (a sentence, a list) stays text.
+    """
+    names: dict[str, sp.Basic] = {str(x): x for x in coordinates}
+    partials = {x: sp.Symbol(PARTIAL_PREFIX + str(x)) for x in coordinates}
+    names.update({str(d): d for d in partials.values()})
+    try:
+        expr = sp.expand(parse_expression(text.replace("∂", PARTIAL_PREFIX), names))
+    except NilpotentError:
+        return html.escape(text)
+    components = [expr.coeff(d) for d in partials.values()]
+    rest = sp.expand(expr - sum(c * d for c, d in zip(components, partials.values(), strict=True)))
+    if any(rest.has(d) or any(c.has(d) for c in components) for d in partials.values()):
+        return html.escape(text)  # not linear in the coordinate fields: keep the text
+    if all(c == 0 for c in components):
+        return formula(expr_latex(expr))
+    return formula(field_latex(components, list(partials)))
+
+
+def _audit_table(audit: Audit, coordinates: Sequence[sp.Symbol]) -> str:
     rows = [
-        (e.id, e.section, e.statement, e.paper, e.computed, e.verdict, e.explanation)
+        (
+            e.id,
+            e.section,
+            e.statement,
+            _paper_cell(e.paper),
+            _computed_cell(e.computed, coordinates),
+            e.verdict,
+            e.explanation,
+        )
         for e in audit.entries
     ]
     return table(
         ("id", "§", "statement", "paper (as printed)", "computed", "verdict", "explanation"),
         rows,
         row_classes=[e.verdict for e in audit.entries],
-        cell_classes=("mono", "num", "", "mono", "mono", "verdict", ""),
+        cell_classes=("mono", "num", "", "", "", "verdict", ""),
+        raw_columns=(3, 4),
         widths=("10%", "3%", "20%", "22%", "20%", "6%", "19%"),
         css_class="audit",
     )
@@ -125,6 +213,8 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
     fig_motion, fig_compare = figures.motion, figures.comparison
     anim_files, scaling_stems = figures.animations, figures.amplitude
     body, vf = systems["body"], systems["vf"]
+    names_y = [y for a in approximations.values() for y in a.names]
+    coordinates = list(dict.fromkeys([*body.coordinates, *vf.coordinates, *names_y]))
     pairs = ((1, 2), (2, 3), (1, 3))
     n_diff = len(audit.differing)
     summary = (
@@ -150,14 +240,25 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
 
     model = (
         "<p>Configuration q = (x, y, θ, φ1, φ2, φ3) = (x1, …, x6): body centre, heading, "
-        "joint angles. The no-side-slip constraint of wheel i, with ψ_i = θ + α_i + φ_i, is "
-        f"{code('−sin ψ_i ẋ + cos ψ_i ẏ + (r cos φ_i + l) θ̇ + l φ̇_i = 0')}; with "
-        "body-velocity inputs it gives the fields of the paper's Section 4 "
-        f"(legs at α = {_angles(BODY_LEG_ANGLES)}):</p>"
-        + _fields_table(body, body.specialized_fields, body.coordinates, "g")
-        + "<p>The paper then works with its simplified eq. vf (the rotation R_θ dropped, "
-        f"legs read at {_angles(PAPER_LEG_ANGLES)}):</p>"
-        + _fields_table(vf, vf.specialized_fields, vf.coordinates, "g")
+        "joint angles. The no-side-slip constraint of wheel i, with "
+        + formula(r"\psi_i = \theta + \alpha_i + \phi_i")
+        + ", is</p>"
+        + formula(
+            r"-\sin\psi_i\,\dot x + \cos\psi_i\,\dot y + (r\cos\phi_i + l)\,\dot\theta"
+            r" + l\,\dot\phi_i = 0",
+            display=True,
+        )
+        + "<p>With body-velocity inputs it gives the fields of the paper's Section 4 "
+        "(legs at "
+        + formula(r"\alpha = " + _angles_latex(BODY_LEG_ANGLES))
+        + "):</p>"
+        + _fields_table(body.specialized_fields, body.coordinates, "g")
+        + "<p>The paper then works with its simplified eq. vf (the rotation "
+        + formula(r"R_\theta")
+        + " dropped, legs read at "
+        + formula(_angles_latex(PAPER_LEG_ANGLES))
+        + "):</p>"
+        + _fields_table(vf.specialized_fields, vf.coordinates, "g")
         + _audit_note(audit, "sec4-vf-same-system", "sec4-vf-g1")
     )
 
@@ -166,17 +267,17 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
         k = s4_names[pair]
         bracket_rows.append(
             (
-                f"[g{pair[0]},g{pair[1]}]",
-                f"g{k}",
-                format_field(brackets["body", pair], body.coordinates),
-                format_field(brackets["vf", pair], vf.coordinates),
+                formula(f"[g_{{{pair[0]}}}, g_{{{pair[1]}}}]"),
+                formula(f"g_{{{k}}}"),
+                formula(field_latex(brackets["body", pair], body.coordinates)),
+                formula(field_latex(brackets["vf", pair], vf.coordinates)),
             )
         )
-    brackets = (
+    brackets_html = (
         table(
             ("bracket", "name (Section 4)", "Section 4 fields, at 0", "eq. vf, at 0"),
             bracket_rows,
-            cell_classes=("mono", "mono", "mono", "mono"),
+            raw_columns=(0, 1, 2, 3),
         )
         + _analysis_block("Section 4 fields", body, filtrations["body"])
         + _analysis_block("eq. vf", vf, filtrations["vf"])
@@ -191,8 +292,11 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
     )
 
     motion_html = [
-        "<p>One period of the periodic input u_i = −A sin t, u_j = A cos t moves "
-        "the robot by πA²[g_i,g_j](0) + O(A³). Trajectories of the body centre, "
+        "<p>One period of the periodic input "
+        + formula(r"u_i = -A\sin t,\ u_j = A\cos t")
+        + " moves the robot by "
+        + formula(r"\pi A^2 [g_i, g_j](0) + O(A^3)")
+        + ". Trajectories of the body centre, "
         "the three vertices and the three wheels; robot at the start (dashed) and "
         "at the end.</p>"
     ]
@@ -206,7 +310,7 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
         disp = m.original[-1] - m.original[0]
         rows.append(
             (
-                f"[g{pair[0]},g{pair[1]}]",
+                formula(f"[g_{{{pair[0]}}}, g_{{{pair[1]}}}]"),
                 ", ".join(f"{v:+.4f}" for v in disp),
                 ", ".join(f"{v - m.original[0][j]:+.4f}" for j, v in enumerate(m.prediction)),
                 f"{m.endpoint_error:.3g}",
@@ -216,7 +320,8 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
         table(
             ("bracket", "q(T) − q(0), original", "πA²[g_i,g_j](0)", "|end original − end approx.|"),
             rows,
-            cell_classes=("mono", "mono", "mono", "num"),
+            cell_classes=("", "mono", "mono", "num"),
+            raw_columns=(0,),
         )
     )
 
@@ -297,7 +402,7 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
         "Each verdict was decided by computation when this page was generated (exact "
         "comparison of expressions; simulations only for which bracket a periodic input "
         "realises). The paper's values are parsed from its LaTeX source.</p>"
-        f"<p>What differs:</p><ul>{differing}</ul>" + _audit_table(audit)
+        f"<p>What differs:</p><ul>{differing}</ul>" + _audit_table(audit, coordinates)
     )
 
     files = (
@@ -316,7 +421,7 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
     sections = [
         ("summary", "Summary", summary),
         ("model", "The trident snake model", model),
-        ("brackets", "Brackets and growth vector", brackets),
+        ("brackets", "Brackets and growth vector", brackets_html),
         ("privileged", "Privileged coordinates and nilpotent approximation", privileged),
         ("motions", "Bracket motions (Figs 2–4)", "".join(motion_html)),
         ("comparison", "Original and approximation (Figs 5–7), animations", "".join(compare_html)),

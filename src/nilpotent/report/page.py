@@ -1,17 +1,23 @@
 """The HTML page of the reproduction: self-contained, offline, no external resources.
 
 Building blocks (each returns an HTML string, every text escaped):
-:func:`table`, :func:`figure`, :func:`animation`, :func:`section`, and
-:func:`page`, which wraps the sections with inline CSS, a table of contents
-and a self-check script.
+:func:`table`, :func:`formula`, :func:`figure`, :func:`animation`,
+:func:`section`, and :func:`page`, which wraps the sections with inline CSS, a
+table of contents and a self-check script.
+
+Formulas are MathML (:func:`nilpotent.typeset.formula_html`), rendered by the
+browser itself: no script, no font and no stylesheet from the network.  Each
+keeps its LaTeX source in ``data-latex`` and a "copy LaTeX" button.
 
 The self-check (inline JavaScript, no library) runs when the page has loaded:
 it counts the ``<img>`` elements and those that decoded (``complete`` and
-``naturalWidth > 0``), counts script errors (``window.onerror``), and writes the
-result on ``#selfcheck`` as ``data-images``, ``data-images-loaded``,
-``data-errors`` and ``data-done="true"``; a headless browser reads them with
-``--dump-dom`` (``tests/test_browser.py``).  Images are relative files under
-``figures/``; nothing is fetched from the network.
+``naturalWidth > 0``), the formulas (``.formula``), those that are a MathML
+``<math>`` element with a non-empty rendered box, counts script errors
+(``window.onerror``), and writes the result on ``#selfcheck`` as
+``data-images``, ``data-images-loaded``, ``data-formulas``,
+``data-formulas-sized``, ``data-errors`` and ``data-done="true"``; a headless
+browser reads them with ``--dump-dom`` (``tests/test_browser.py``).  Images are
+relative files under ``figures/``; nothing is fetched from the network.
 """
 
 from __future__ import annotations
@@ -19,7 +25,9 @@ from __future__ import annotations
 import html
 from collections.abc import Iterable, Sequence
 
-__all__ = ["animation", "code", "figure", "page", "section", "table"]
+from nilpotent.typeset import formula_html
+
+__all__ = ["animation", "code", "figure", "formula", "page", "section", "table"]
 
 _CSS = """
 :root { --fg: #1d1d1f; --muted: #5b5b60; --line: #d8d8dc; --ok: #1a7f37; --bad: #b42318;
@@ -52,6 +60,15 @@ figcaption { color: var(--muted); font-size: .9em; }
 .card { border: 1px solid var(--line); border-radius: 6px; padding: .6em 1em; }
 .card b { font-size: 1.3em; display: block; }
 .note { background: #f7f7f9; border-left: 3px solid var(--line); padding: .5em .8em; }
+math { font-size: 1.08em; font-family: math, "STIX Two Math", "Latin Modern Math",
+       "Cambria Math", serif; }
+.formula { display: inline-flex; align-items: center; gap: .35em; max-width: 100%;
+           overflow-x: auto; vertical-align: middle; }
+div.formula { display: flex; margin: .6em 0; }
+.copy-latex { font: 600 .68em system-ui, sans-serif; color: var(--muted); background: #fff;
+              border: 1px solid var(--line); border-radius: 3px; padding: 0 .3em;
+              cursor: pointer; opacity: .35; flex: none; }
+.formula:hover .copy-latex, .copy-latex:focus { opacity: 1; }
 """
 
 _SELFCHECK = """
@@ -68,9 +85,19 @@ _SELFCHECK = """
     box.dataset.missing = imgs.filter(function (im) {
       return !(im.complete && im.naturalWidth > 0);
     }).map(function (im) { return im.getAttribute("src"); }).join(" ");
+    var formulas = Array.prototype.slice.call(document.querySelectorAll(".formula"));
+    var sized = formulas.filter(function (f) {
+      var m = f.firstElementChild;
+      if (!m || m.namespaceURI !== "http://www.w3.org/1998/Math/MathML") { return false; }
+      var r = m.getBoundingClientRect();
+      return r.width > 0 && r.height > 0 && f.hasAttribute("data-latex");
+    });
+    box.dataset.formulas = String(formulas.length);
+    box.dataset.formulasSized = String(sized.length);
     box.dataset.done = "true";
     box.textContent = "self-check: " + loaded.length + "/" + imgs.length +
-      " images loaded, " + errors + " script errors";
+      " images loaded, " + sized.length + "/" + formulas.length + " formulas rendered, " +
+      errors + " script errors";
   }
   window.addEventListener("load", report);
 })();
@@ -84,6 +111,11 @@ def _e(text: object) -> str:
 def code(text: str) -> str:
     """Inline monospace text."""
     return f"<code>{_e(text)}</code>"
+
+
+def formula(latex: str, *, display: bool = False) -> str:
+    """A typeset formula (MathML) with its LaTeX source and a "copy LaTeX" button."""
+    return formula_html(latex, display=display)
 
 
 def table(

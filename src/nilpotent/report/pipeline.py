@@ -92,7 +92,27 @@ QUICK = Settings(0.3, 61, 8, (0.05, 0.1, 0.2, 0.4), 90, 60)
 
 @dataclass(frozen=True)
 class Reproduction:
-    """What :func:`reproduce` wrote (paths are inside ``out_dir``) and its key numbers."""
+    """What :func:`reproduce` wrote (paths are inside ``out_dir``) and its key numbers.
+
+    Attributes
+    ----------
+    out_dir:
+        The folder written.
+    index, audit_path:
+        ``index.html`` and ``audit.json``.
+    audit:
+        The audit of the paper.
+    figures, data, animations:
+        The files written under ``figures/`` and ``data/``.
+    slopes:
+        The fitted log–log slopes of the error study, by model and bracket.
+    quick:
+        Whether the quick settings were used.
+    seconds:
+        Wall-clock time of the whole reproduction.
+    timings:
+        Wall-clock seconds of each step.
+    """
 
     out_dir: Path
     index: Path

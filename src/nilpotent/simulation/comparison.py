@@ -185,6 +185,21 @@ class Comparison:
 
         return plot_comparison(self, fig)
 
+    # --- display (nilpotent.typeset) -------------------------------------------------
+    def to_latex(self) -> str:
+        """The input, the predicted motion and the errors by weight as LaTeX (``align*``)."""
+        from nilpotent import typeset
+
+        return typeset.comparison_display(self).latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        from nilpotent import typeset
+
+        return typeset.comparison_display(self).html()
+
 
 def floats(arr: np.ndarray) -> list[float]:
     """The entries of ``arr`` as a flat list of Python floats (for JSON)."""

@@ -54,6 +54,8 @@ class ScalingStudy:
         The noise floor used: errors below it are not fitted.
     tolerance:
         Accuracy of the integrations.
+    engine:
+        The integration engine that computed the trajectories.
     """
 
     system: ControlSystem

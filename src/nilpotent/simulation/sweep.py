@@ -95,6 +95,11 @@ def amplitude_range(low: float, high: float, count: int) -> tuple[float, ...]:
         The smallest and largest amplitude (``0 < low ≤ high``).
     count : int
         How many amplitudes (≥ 1).
+
+    Raises
+    ------
+    OptionError
+        Amplitudes that are not ``0 < low ≤ high`` (finite), or a bad ``count``.
     """
     if not (math.isfinite(low) and math.isfinite(high) and 0 < low <= high):
         raise OptionError(f"amplitudes: need 0 < A1 <= A2, got {low} and {high}")

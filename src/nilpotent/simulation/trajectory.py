@@ -74,6 +74,11 @@ class Trajectory:
         NaN when not known).
     method, engine:
         How it was integrated (``""`` when not known).
+
+    Raises
+    ------
+    OptionError
+        States that are not ``(T, n)`` for the ``T`` sample times.
     """
 
     times: Times

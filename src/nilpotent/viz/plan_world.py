@@ -90,13 +90,21 @@ def _draw_plane(ax: Any, result: Any, snapshots: int) -> None:
         for i in range(discs.shape[1]):
             ax.plot(discs[:, i, 0], discs[:, i, 1], color=_TRACKS[i % len(_TRACKS)], lw=0.8,
                     label=f"track of point {i + 1}")
-    ax.plot(states[:, 0], states[:, 1], color="black", lw=1.0, label=f"({names[0]}, {names[1]})")
-    way = np.asarray(result.waypoints)
-    ax.plot(way[:, 0], way[:, 1], "x", color="#D55E00", markersize=5, label="waypoints")
-    ax.plot(*p.goal[:2], "*", color="#D55E00", markersize=12, label="goal")
-    ax.set_xlabel(names[0])
-    ax.set_ylabel(names[1])
-    ax.set_aspect("equal", adjustable="datalim")
+    if states.shape[1] == 1:  # one coordinate: there is no plane, draw it against time
+        times = p.trajectory.times
+        ax.plot(times, states[:, 0], color="black", lw=1.0, label=names[0])
+        ax.plot(times[-1], p.goal[0], "*", color="#D55E00", markersize=12, label="goal")
+        ax.set_xlabel("time")
+        ax.set_ylabel(names[0])
+    else:
+        ax.plot(states[:, 0], states[:, 1], color="black", lw=1.0,
+                label=f"({names[0]}, {names[1]})")
+        way = np.asarray(result.waypoints)
+        ax.plot(way[:, 0], way[:, 1], "x", color="#D55E00", markersize=5, label="waypoints")
+        ax.plot(*p.goal[:2], "*", color="#D55E00", markersize=12, label="goal")
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(names[1])
+        ax.set_aspect("equal", adjustable="datalim")
     title = f"{p.system.name}" + (f" in {result.world.name}" if result.world is not None else "")
     v = result.verification
     if v.clearance is not None:

@@ -21,6 +21,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Polygon
 
 from nilpotent.models.trident import TridentGeometry
+from nilpotent.numeric.types import State
 
 __all__ = ["LEG_COLORS", "TridentArtists", "draw_trident", "update_trident"]
 
@@ -42,7 +43,7 @@ class TridentArtists:
         return (self.body, *self.legs, *self.wheels, self.centre)
 
 
-def _parts(geometry: TridentGeometry, q: Sequence[float]) -> tuple[np.ndarray, ...]:
+def _parts(geometry: TridentGeometry, q: Sequence[float] | State) -> tuple[np.ndarray, ...]:
     qq = np.asarray(q, dtype=float)
     vertices = geometry.vertices(qq)
     wheels = geometry.wheels(qq)
@@ -135,7 +136,7 @@ def draw_trident(
 
 
 def update_trident(
-    artists: TridentArtists, q: Sequence[float], geometry: TridentGeometry | None = None
+    artists: TridentArtists, q: Sequence[float] | State, geometry: TridentGeometry | None = None
 ) -> TridentArtists:
     """Move already-drawn robot artists to configuration ``q`` (for animations)."""
     geom = geometry if geometry is not None else TridentGeometry()

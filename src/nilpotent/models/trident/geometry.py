@@ -10,10 +10,12 @@ come from the true system (the paper's closing remark).  Uses numpy
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+import sympy as sp
 
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ModelError, OptionError
@@ -36,9 +38,14 @@ SampledConfigs = npt.ArrayLike
 
 
 #: The legs' angle offsets as floats, by form family (``"body"``, ``"paper"``).
+def _float_angles(angles: Sequence[sp.Expr | float]) -> tuple[float, float, float]:
+    a, b, c = (float(v) for v in angles)
+    return (a, b, c)
+
+
 FLOAT_LEG_ANGLES = {
-    "body": tuple(float(a) for a in BODY_LEG_ANGLES),
-    "paper": tuple(float(a) for a in PAPER_LEG_ANGLES),
+    "body": _float_angles(BODY_LEG_ANGLES),
+    "paper": _float_angles(PAPER_LEG_ANGLES),
 }
 
 
@@ -79,6 +86,11 @@ class TridentGeometry:
         the legs with ``(−2π/3, 0, 2π/3)`` (:meth:`for_form`); the body is the
         same triangle, only the legs' numbering differs.
 
+    Raises
+    ------
+    ModelError
+        Non-positive ``r`` or ``l``, or not three offsets.
+
     Examples
     --------
     >>> g = TridentGeometry()
@@ -94,9 +106,9 @@ class TridentGeometry:
         r, l = float(self.r), float(self.l)
         if not (np.isfinite(r) and np.isfinite(l) and r > 0 and l > 0):
             raise ModelError(f"trident geometry needs r > 0 and l > 0, got r={r}, l={l}")
-        offs = tuple(float(a) for a in self.offsets)
-        if len(offs) != 3:
-            raise ModelError(f"trident geometry needs three leg offsets, got {len(offs)}")
+        if len(self.offsets) != 3:
+            raise ModelError(f"trident geometry needs three leg offsets, got {len(self.offsets)}")
+        offs = _float_angles(self.offsets)
         object.__setattr__(self, "r", r)
         object.__setattr__(self, "l", l)
         object.__setattr__(self, "offsets", offs)
@@ -280,6 +292,13 @@ def wheel_slip(
     Returns
     -------
     WheelSlip
+
+    Raises
+    ------
+    OptionError
+        A trajectory that is not ``(T, 6)`` with ``(T,)`` times, velocities of
+        another shape, fewer than 3 samples, or times that do not increase
+        strictly.
 
     Examples
     --------

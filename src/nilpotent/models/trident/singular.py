@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from nilpotent.core.expressions import as_expr
 from nilpotent.errors import OptionError
 from nilpotent.models.trident.forms import PAPER_LEG_ANGLES, form_symbols, joint_parts
 from nilpotent.models.trident.geometry import (
@@ -80,7 +81,7 @@ def paper_singular_locus() -> sp.Expr:
     rows = []
     for c, p in zip(PAPER_LEG_ANGLES, phis, strict=True):
         rows.append([_ONE, sp.sin(p + c) + sp.sin(c), sp.cos(p + c) + sp.cos(c)])
-    return sp.Matrix(rows).det()
+    return as_expr(sp.Matrix(rows).det())
 
 
 def joint_determinant(q: Configs, geometry: TridentGeometry | None = None) -> np.ndarray:

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import sympy as sp
 
-from nilpotent.core.expressions import format_expression
+from nilpotent.core.expressions import as_expr, format_expression
 from nilpotent.report.latexmath import strip_layout
 from nilpotent.report.paper import PrintedField
 
@@ -43,9 +43,9 @@ _DIGITS = 30
 _NUMERIC_ZERO = sp.Float("1e-20")
 
 
-def vanishes_identically(expr: sp.Expr, seed: int = 0) -> bool:
+def vanishes_identically(expr: sp.Expr | int, seed: int = 0) -> bool:
     """Whether ``expr`` is identically zero (random 30-digit points, then sympy)."""
-    e = sp.expand(sp.S(expr))
+    e = sp.expand(as_expr(expr))
     if e == 0:
         return True
     free = sorted(e.free_symbols, key=str)
@@ -54,35 +54,35 @@ def vanishes_identically(expr: sp.Expr, seed: int = 0) -> bool:
     rng = random.Random(seed)
     for _ in range(_SAMPLES):
         point = {s: sp.Rational(rng.randint(-97, 97), 31) for s in free}
-        if abs(sp.N(e.subs(point), _DIGITS)) > _NUMERIC_ZERO:
+        if abs(sp.N(e.subs(list(point.items())), _DIGITS)) > _NUMERIC_ZERO:
             return False
     return True
 
 
-def same_exprs(a: Sequence[sp.Expr], b: Sequence[sp.Expr]) -> bool:
+def same_exprs(a: Sequence[sp.Expr | int], b: Sequence[sp.Expr | int]) -> bool:
     return len(a) == len(b) and all(
-        vanishes_identically(sp.S(x) - sp.S(y)) for x, y in zip(a, b, strict=True)
+        vanishes_identically(as_expr(x) - as_expr(y)) for x, y in zip(a, b, strict=True)
     )
 
 
 def exact_value(value: sp.Expr) -> sp.Expr:
-    return sp.nsimplify(sp.simplify(value)) if sp.S(value).free_symbols == set() else value
+    return sp.nsimplify(sp.simplify(value)) if as_expr(value).free_symbols == set() else value
 
 
 def at_origin(field: Sequence[sp.Expr], coords: Sequence[sp.Symbol]) -> tuple[sp.Expr, ...]:
-    zero = {c: 0 for c in coords}
-    return tuple(sp.radsimp(sp.simplify(sp.S(c).subs(zero))) for c in field)
+    zero = [(c, 0) for c in coords]
+    return tuple(sp.radsimp(sp.simplify(as_expr(c).subs(zero))) for c in field)
 
 
 def fmt(value: sp.Expr) -> str:
-    return format_expression(sp.S(value))
+    return format_expression(as_expr(value))
 
 
-def format_field(comps: Sequence[sp.Expr], coords: Sequence[sp.Symbol]) -> str:
+def format_field(comps: Sequence[sp.Expr | int], coords: Sequence[sp.Symbol]) -> str:
     """``sqrt(3)*∂x5 - sqrt(3)*∂x6``: a field in the expression grammar with ∂ names."""
     terms = []
     for c, x in zip(comps, coords, strict=True):
-        c = sp.S(c)
+        c = as_expr(c)
         if c == 0:
             continue
         name = f"∂{x}"
@@ -126,7 +126,7 @@ def fmt_rate(values: Sequence[float]) -> str:
     return "(" + ", ".join(f"{v:.4f}" if abs(v) >= 5e-5 else "0" for v in values) + ")"
 
 
-def proportional(u: Sequence[sp.Expr], v: Sequence[sp.Expr]) -> bool:
+def proportional(u: Sequence[sp.Expr | int], v: Sequence[sp.Expr | int]) -> bool:
     """Both nonzero and parallel (``u = c v`` for some real ``c ≠ 0``)."""
     if all(vanishes_identically(a) for a in u) or all(vanishes_identically(b) for b in v):
         return False
@@ -142,7 +142,7 @@ def weighted_part(
 ) -> sp.Expr:
     """The terms of weighted degree ``d`` of ``expr`` at 0 (Taylor; weights ``w_k`` of ``y_k``)."""
     t = sp.Dummy("t")
-    scaled = sp.S(expr).subs(
+    scaled = as_expr(expr).subs(
         {y: t**w * y for y, w in zip(ys, weights, strict=True)}, simultaneous=True
     )
     coeff = sp.diff(scaled, t, d).subs(t, 0) / sp.factorial(d)
@@ -150,13 +150,16 @@ def weighted_part(
 
 
 def push_forward(
-    fields: Sequence[Sequence[sp.Expr]], jac: sp.Matrix, old: Sequence[sp.Symbol], inverse: dict
+    fields: Sequence[Sequence[sp.Expr]],
+    jac: sp.MatrixBase,
+    old: Sequence[sp.Symbol],
+    inverse: dict,
 ) -> tuple[tuple[sp.Expr, ...], ...]:
     """Push fields forward by a change of coordinates with Jacobian ``jac`` (new/old)."""
     out = []
     for f in fields:
-        col = jac * sp.Matrix([sp.S(c) for c in f])
-        out.append(tuple(sp.expand(sp.S(c).subs(inverse, simultaneous=True)) for c in col))
+        col = jac * sp.Matrix([as_expr(c) for c in f])
+        out.append(tuple(sp.expand(as_expr(c).subs(inverse, simultaneous=True)) for c in col))
     return tuple(out)
 
 
@@ -170,5 +173,5 @@ def numeric_rank(vectors: Sequence[Sequence[sp.Expr]]) -> int:
     return rank(vectors, probabilistic=True)[0]
 
 
-def matrix_text(m: sp.Matrix) -> str:
+def matrix_text(m: sp.MatrixBase) -> str:
     return "[" + "; ".join(", ".join(fmt(v) for v in m.row(r)) for r in range(m.rows)) + "]"

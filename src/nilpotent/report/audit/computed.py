@@ -12,6 +12,7 @@ from functools import cached_property
 import sympy as sp
 
 from nilpotent.core.brackets import bracket
+from nilpotent.core.expressions import as_expr
 from nilpotent.core.system import ControlSystem
 from nilpotent.report.audit.compare import at_origin, push_forward, weighted_part
 from nilpotent.report.paper import PaperContent, X, Y
@@ -32,7 +33,7 @@ class Computed:
         model = get_model("trident-snake", {"r": sp.Integer(1), "l": sp.Integer(1)}).specialized()
         # the paper's names: (x, y, θ, φ1, φ2, φ3) =: (x1, ..., x6)
         rename = dict(zip(model.coordinates, X, strict=True))
-        fields = tuple(tuple(sp.S(v).xreplace(rename) for v in f) for f in model.fields)
+        fields = tuple(tuple(as_expr(v.xreplace(rename)) for v in f) for f in model.fields)
         return ControlSystem(model.name, X, fields, (), model.description)
 
     @cached_property
@@ -129,7 +130,7 @@ class Computed:
         """Non-holonomic order at 0 of the linear function ``row · x`` for eq. vf."""
         from nilpotent.core.orders import function_order
 
-        return function_order(self.vf, sum(row[j] * X[j] for j in range(6)), None, 4)
+        return function_order(self.vf, as_expr(sum(row[j] * X[j] for j in range(6))), None, 4)
 
     def field_order(self, field: Sequence[sp.Expr]) -> float:
         """Non-holonomic order at 0 of a vector field on eq. vf's space (``MATH.md`` §3).
@@ -142,6 +143,6 @@ class Computed:
         weights = self.vf_filtration.weights
         out = math.inf
         for zj, wj in zip(z, weights, strict=True):
-            f = sp.expand(sum(sp.S(field[k]) * sp.diff(zj, X[k]) for k in range(6)))
+            f = sp.expand(sum(as_expr(field[k]) * sp.diff(zj, X[k]) for k in range(6)))
             out = min(out, function_order(self.vf, f, None, wj + 2) - wj)
         return out

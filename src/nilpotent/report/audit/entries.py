@@ -48,7 +48,15 @@ class AuditEntry:
 
 @dataclass(frozen=True)
 class Audit:
-    """The audit of the paper: its entries and the source they were read from."""
+    """The audit of the paper: its entries and the source they were read from.
+
+    Attributes
+    ----------
+    entries:
+        One :class:`AuditEntry` per checked statement, in the paper's order.
+    paper_sha256:
+        SHA-256 of the LaTeX source the paper's values were read from.
+    """
 
     entries: tuple[AuditEntry, ...]
     paper_sha256: str

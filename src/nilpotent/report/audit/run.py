@@ -80,6 +80,13 @@ def run_audit(
     -------
     Audit
         One :class:`AuditEntry` per checked statement, in the paper's order.
+
+    Raises
+    ------
+    OptionError
+        ``only`` names a group of checks that does not exist.
+    RuntimeError
+        Two checks produced the same entry id (a bug of the audit, not of the input).
     """
     content = read_paper() if paper is None else paper
     known = [name for name, _ in CHECKS]

@@ -8,6 +8,7 @@ from collections.abc import Iterable, Sequence
 import sympy as sp
 
 from nilpotent.core.brackets import bracket
+from nilpotent.core.expressions import as_expr
 from nilpotent.report.audit.compare import (
     fmt,
     fmt_rate,
@@ -27,7 +28,8 @@ from nilpotent.report.paper import PaperContent, PrintedField, X
 def check_growth(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
     claim = paper.growth_claim
     body, vf = c.body_filtration, c.vf_filtration
-    ok = body.growth_vector == claim and vf.growth_vector == claim and body.bracket_generating
+    same = body.growth_vector == claim and vf.growth_vector == claim
+    ok = same and body.bracket_generating is True
     yield make_entry(
         "sec1-growth-vector",
         paper.growth_text.section,
@@ -40,7 +42,7 @@ def check_growth(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
         else "analyze() finds another growth vector",
     )
     generic = (body.generic_growth_vector, vf.generic_growth_vector)
-    ok = all(g == claim for g in generic) and body.regular and vf.regular
+    ok = all(g == claim for g in generic) and body.regular is True and vf.regular is True
     yield make_entry(
         "sec4-growth-regular",
         "4",
@@ -169,11 +171,11 @@ def check_vf(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
         brs = [bracket(f[i], f[j], sys.coordinates) for i, j in pairs]
         rng = random.Random(7)
         point = {s: sp.Rational(rng.randint(-60, 60), 37) for s in sys.coordinates}
-        vals = [[sp.S(v).subs(point) for v in b] for b in brs]
+        vals = [[as_expr(v).subs(list(point.items())) for v in b] for b in brs]
         extra = []
         for a, b in ((0, 1), (1, 2), (0, 2)):
             bb = bracket(brs[a], brs[b], sys.coordinates)
-            extra.append([sp.S(v).subs(point) for v in bb])
+            extra.append([as_expr(v).subs(list(point.items())) for v in bb])
         ranks[name] = (numeric_rank(vals), numeric_rank(vals + extra))
     involutive = {name: r[0] == r[1] for name, r in ranks.items()}
     same = involutive["vf"] == involutive["Section 4"]

@@ -6,6 +6,7 @@ from collections.abc import Iterable
 
 import sympy as sp
 
+from nilpotent.core.expressions import as_expr
 from nilpotent.report.audit.compare import (
     at_origin,
     fmt,
@@ -43,7 +44,8 @@ def check_privileged(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
         "Section 7 names": paper.bracket_labels_sec7,
     }
     products = {
-        name: sp.simplify(m * c.frame_matrix(lab, c.vf)) for name, lab in labels_tried.items()
+        name: (m * c.frame_matrix(lab, c.vf)).applyfunc(sp.simplify)
+        for name, lab in labels_tried.items()
     }
     printed = sp.Matrix(
         [
@@ -52,7 +54,7 @@ def check_privileged(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
             for r in range(6)
         ]
     )
-    products["printed eq. liebrackets"] = sp.simplify(m * printed)
+    products["printed eq. liebrackets"] = (m * printed).applyfunc(sp.simplify)
     ok_any = [n for n, p in products.items() if p == sp.eye(6)]
     correct = c.frame_matrix(paper.bracket_labels_sec4, c.vf).inv()
     yield make_entry(
@@ -61,7 +63,7 @@ def check_privileged(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
         "The linear map y = M x of Section 5 satisfies ∂/∂y_i|_0 = g_i|_0 for i = 1..6 "
         "(g4, g5, g6 the brackets of eq. liebrackets).",
         "M = " + printed_matrix(paper.privileged_matrix_latex),
-        "M must be [g1(0) … g6(0)]⁻¹ = " + matrix_text(sp.simplify(correct)),
+        "M must be [g1(0) … g6(0)]⁻¹ = " + matrix_text(correct.applyfunc(sp.simplify)),
         bool(ok_any),
         ("holds with " + ok_any[0])
         if ok_any
@@ -70,9 +72,13 @@ def check_privileged(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
     )
     g0 = [at_origin(f, X) for f in c.vf.specialized_fields]
     rows_ok = all(
-        vanishes_identically(sum(m[r, j] * g[j] for j in range(6))) for r in (3, 4, 5) for g in g0
+        vanishes_identically(as_expr(sum(m[r, j] * g[j] for j in range(6))))
+        for r in (3, 4, 5)
+        for g in g0
     )
-    values = [[sp.simplify(sum(m[r, j] * g[j] for j in range(6))) for g in g0] for r in (3, 4, 5)]
+    values = [
+        [sp.simplify(as_expr(sum(m[r, j] * g[j] for j in range(6)))) for g in g0] for r in (3, 4, 5)
+    ]
     yield make_entry(
         "sec5-matrix-weight2-rows",
         "5",

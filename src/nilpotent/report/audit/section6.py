@@ -7,6 +7,7 @@ from collections.abc import Iterable, Sequence
 import sympy as sp
 
 from nilpotent.core.brackets import bracket
+from nilpotent.core.expressions import as_expr
 from nilpotent.report.audit.compare import (
     fmt,
     format_field,
@@ -47,7 +48,7 @@ def check_approximation(paper: PaperContent, c: Computed) -> Iterable[AuditEntry
         low = c.paper_y_low_terms[k]
         ok = same_exprs(printed.components, trunc)
         ours_k = [
-            sp.S(v).subs(dict(zip(approx.coordinates.names, Y, strict=True))) for v in ours_y[k]
+            as_expr(v).subs(dict(zip(approx.coordinates.names, Y, strict=True))) for v in ours_y[k]
         ]
         if ok:
             why = f"equals the terms of weighted degree w_j − 1 of g{k + 1} in y = M x"
@@ -80,8 +81,8 @@ def check_approximation(paper: PaperContent, c: Computed) -> Iterable[AuditEntry
     # become L·(ours) + grad q and the (constant) brackets L·(ours).  So L is fixed by the
     # brackets, and the printed family is such an approximation iff printed − L·ours is, in
     # each weight-2 component, the gradient of a quadratic (symmetric Jacobian).
-    sub = dict(zip(names, Y, strict=True))
-    ours_in_y = [[sp.S(v).subs(sub) for v in f] for f in ours_y]
+    sub = list(zip(names, Y, strict=True))
+    ours_in_y = [[as_expr(v).subs(sub) for v in f] for f in ours_y]
     printed_y = [f.components for f in paper.approximation_y]
     pairs = ((1, 2), (1, 3), (2, 3))
 
@@ -98,7 +99,7 @@ def check_approximation(paper: PaperContent, c: Computed) -> Iterable[AuditEntry
     )
     change = sp.zeros(3, 3)
     if ok:
-        change = sp.simplify(b_printed * b_ours.inv())
+        change = (b_printed * b_ours.inv()).applyfunc(sp.simplify)
         rest = [
             sp.Matrix(printed_y[k][3:]) - change * sp.Matrix(ours_in_y[k][3:]) for k in range(3)
         ]
@@ -129,7 +130,7 @@ def check_approximation(paper: PaperContent, c: Computed) -> Iterable[AuditEntry
 
 def _is_form(expr: sp.Expr, degree: int) -> bool:
     """Whether ``expr`` is a homogeneous polynomial of ``degree`` in y1, y2, y3 only."""
-    e = sp.expand(sp.S(expr))
+    e = sp.expand(as_expr(expr))
     if e == 0:
         return True
     if e.free_symbols - set(Y[:3]):

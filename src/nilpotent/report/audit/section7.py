@@ -7,6 +7,7 @@ from collections.abc import Iterable, Sequence
 import sympy as sp
 
 from nilpotent.core.brackets import bracket
+from nilpotent.core.expressions import as_expr
 from nilpotent.report.audit.compare import (
     fmt_rate,
     format_field,
@@ -100,12 +101,12 @@ def check_motions_coincide(paper: PaperContent, c: Computed) -> Iterable[AuditEn
     approx = c.approximation
     names = approx.coordinates.names
     jac = sp.Matrix([[sp.diff(xf, yv) for yv in names] for xf in approx.coordinates.inverse])
-    at0 = {yv: 0 for yv in names}
+    at0 = [(yv, 0) for yv in names]
     rows = []
     ok = True
     for i, j in ((1, 2), (1, 3), (2, 3)):
         hat = bracket(approx.fields[i - 1], approx.fields[j - 1], names)
-        hat_x = jac.subs(at0) * sp.Matrix([sp.S(v).subs(at0) for v in hat])
+        hat_x = jac.subs(at0) * sp.Matrix([as_expr(v).subs(at0) for v in hat])
         orig = c.bracket_at_origin(c.vf, i, j)
         same = same_exprs(list(hat_x), orig)
         ok = ok and same

@@ -1,0 +1,74 @@
+"""The package as users get it: ``python -m build`` makes an sdist and a wheel (the wheel
+built from the sdist) that install into a fresh virtual environment and run.
+
+The fresh environment gets the wheel with ``--no-deps``; the dependencies are
+those of the test environment, made visible by a ``.pth`` file naming its
+``site-packages`` (a path there is added to ``sys.path`` but its own ``.pth``
+files, such as an editable install of this checkout, are not processed).  A
+clean install of every dependency (heyoka, numba, scipy, ...) would take minutes
+and the network; what this test checks is the package itself: its files, its
+entry point and its data (the paper's LaTeX source the audit reads).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import sysconfig
+import tarfile
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+pytestmark = pytest.mark.slow
+
+
+def _run(cmd: list[str], **kw) -> subprocess.CompletedProcess[str]:
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    done = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600, **kw)
+    assert done.returncode == 0, (cmd, done.stdout[-2000:], done.stderr[-2000:])
+    return done
+
+
+def test_wheel_and_sdist_install_into_a_fresh_venv_and_run(tmp_path):
+    dist = tmp_path / "dist"
+    _run([sys.executable, "-m", "build", "--outdir", str(dist), str(ROOT)])
+    (wheel,) = dist.glob("nilpotent-*.whl")
+    (sdist,) = dist.glob("nilpotent-*.tar.gz")
+    names = zipfile.ZipFile(wheel).namelist()
+    needed_files = (
+        "nilpotent/py.typed",
+        "nilpotent/report/assets/paper.tex",
+        "nilpotent/cli/app.py",
+    )
+    for needed in needed_files:
+        assert needed in names, needed
+    assert any(n.endswith("entry_points.txt") for n in names)
+    with tarfile.open(sdist) as tar:
+        members = tar.getnames()
+    assert any(m.endswith("src/nilpotent/report/assets/paper.tex") for m in members)
+    assert any(m.endswith("pyproject.toml") for m in members)
+
+    venv = tmp_path / "venv"
+    _run([sys.executable, "-m", "venv", str(venv)])
+    python = venv / "bin" / "python"
+    site = _run(
+        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"]
+    ).stdout.strip()
+    Path(site, "test-dependencies.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    _run([str(python), "-m", "pip", "install", "--no-deps", "--quiet", str(wheel)])
+
+    where = _run([str(python), "-c", "import nilpotent; print(nilpotent.__file__)"], cwd=tmp_path)
+    assert Path(where.stdout.strip()).is_relative_to(venv), where.stdout
+    exe = str(venv / "bin" / "nilpotent")
+    models = _run([exe, "models"], cwd=tmp_path)
+    assert "trident-snake" in models.stdout
+    out = _run([exe, "approximate", "trident-snake", "--json"], cwd=tmp_path)
+    payload = json.loads(out.stdout)
+    assert payload["growth_vector"] == [3, 6]
+    assert payload["weights"] == [1, 1, 1, 2, 2, 2]
