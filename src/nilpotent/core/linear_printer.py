@@ -8,6 +8,7 @@ terms), where sympy's ``StrPrinter`` sorts every sum and is far slower.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import sympy as sp
 
@@ -16,7 +17,7 @@ from nilpotent.errors import ExpressionError
 __all__ = ["print_linear"]
 
 
-def print_linear(e: sp.Basic, functions: Mapping[type, str]) -> str:
+def print_linear(e: sp.Basic, functions: Mapping[Any, str]) -> str:
     """Text of the grammar for ``e`` in time linear in its size (terms in stored order).
 
     sympy's printer sorts the terms of every sum and computes precedences

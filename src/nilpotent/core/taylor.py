@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import operator
 from collections.abc import Iterable, Mapping, Sequence
+from typing import cast
 
 import symengine as se
 import sympy as sp
@@ -360,7 +361,7 @@ class Poly:
             else:
                 out.append(sp.Mul._from_args(f))
         if len(out) > 1:
-            return sp.Add._from_args(out)
+            return cast(sp.Expr, sp.Add._from_args(out))
         return out[0] if out else sp.Integer(0)
 
 
