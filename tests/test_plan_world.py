@@ -9,6 +9,7 @@ against the obstacles with matplotlib's point-in-polygon and plain distances
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -437,3 +438,93 @@ def test_user_model_file_with_outline_plans_around_a_disc(run_cli, tmp_path):
     assert (np.hypot(q[:, 0] - 1.0, q[:, 1]) > 0.5).all()        # 0.3 + 0.2
     assert (np.abs(q[:, 2]) <= math.pi / 2 + 1e-9).all()
     assert data["clearance"] > 0 and data["world"] == "w"
+
+
+# --- global path with the shape held; single-configuration checks ---------------------------
+
+DOORWAY = {
+    "name": "doorway",
+    "bounds": {"x": [-6.0, 10.0], "y": [-5.0, 5.0]},
+    "obstacles": [
+        {"polygon": [[1.7, -5.0], [2.3, -5.0], [2.3, -2.3], [1.7, -2.3]]},
+        {"polygon": [[1.7, 2.3], [2.3, 2.3], [2.3, 5.0], [1.7, 5.0]]},
+    ],
+}
+
+
+def test_shape_coordinates_are_the_limited_non_position_ones():
+    from nilpotent.planning.global_planner import shape_indices
+
+    trident = Checker(get_model("trident-snake"))
+    names = trident.system.coordinate_names
+    assert [names[j] for j in shape_indices(trident)] == ["phi1", "phi2", "phi3"]
+    assert shape_indices(Checker(get_model("car-trailers:1"))) == ()
+    # a user limit on x does not make x a shape coordinate; one on theta does
+    lim = Checker(get_model("trident-snake")).limits.tightened(  # type: ignore[union-attr]
+        {"x": (-1.0, 1.0), "theta": (-1.0, 1.0)})
+    assert [names[j] for j in shape_indices(Checker(get_model("trident-snake"), limits=lim))] \
+        == ["theta", "phi1", "phi2", "phi3"]
+
+
+def test_held_ompl_path_keeps_the_shape_and_is_admissible():
+    from nilpotent.planning.global_planner import ompl_path
+
+    checker = Checker(get_model("trident-snake"), world_from_dict(DOORWAY))
+    start = np.array([-3.0, 2.5, 0.4, 0.3, -0.2, 0.1])
+    goal = np.array([6.0, -2.5, -1.0, 0.3, -0.2, 0.1])
+    path = ompl_path(checker, start, goal, 20.0, seed=1, held=(3, 4, 5))
+    assert np.allclose(path[0], start) and np.allclose(path[-1], goal)
+    for q in path:
+        assert np.array_equal(q[3:], start[3:])
+    for a, b in itertools.pairwise(path):
+        t = np.linspace(0, 1, 400)[:, None]
+        chord = a + t * (b - a)
+        assert checker.valid(chord).all()
+        assert independent_collision_free(chord, DOORWAY)
+    with pytest.raises(ValueError, match="held"):
+        ompl_path(checker, start, goal + np.array([0, 0, 0, 0.1, 0, 0]), 1.0, held=(3,))
+
+
+def test_shape_held_path_changes_the_shape_only_at_the_goal_pose():
+    from nilpotent.planning.global_planner import shape_held_path
+
+    checker = Checker(get_model("trident-snake"), world_from_dict(DOORWAY))
+    start = np.array([-3.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    goal = np.array([6.0, 1.0, 0.5, 0.4, -0.3, 0.2])
+    path = shape_held_path(checker, start, goal, 20.0, 0, checker.valid, (3, 4, 5))
+    assert np.allclose(path[-1], goal)
+    for q in path[:-1]:
+        assert np.array_equal(q[3:], start[3:])
+    assert np.allclose(path[-2][:3], goal[:3])  # the shape changes at the goal's pose
+    # a goal whose pose with the start's shape is inside the wall: refused, not guessed
+    wall_goal = np.array([2.0, 3.5, 0.0, 0.0, 0.0, 0.0])
+    with pytest.raises(PlanningError, match="not admissible"):
+        shape_held_path(checker, start, wall_goal, 1.0, 0, checker.valid, (3, 4, 5))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.floats(-4.0, 4.0), min_size=6, max_size=6),
+       st.lists(st.floats(0.1, 3.0), min_size=3, max_size=3))
+def test_limit_margin_is_the_distance_to_the_nearest_bound(q, half):
+    lim = Limits(tuple((f"phi{i + 1}", -h, h) for i, h in enumerate(half)))
+    checker = Checker(get_model("trident-snake"), limits=lim)
+    margin = float(checker.robot.limit_margin(np.array([q]))[0])
+    expected = min(min(q[3 + i] + h, h - q[3 + i]) for i, h in enumerate(half))
+    assert margin == pytest.approx(expected)
+
+
+@pytest.mark.slow
+def test_doorway_plan_keeps_legs_straight_and_is_verified_independently():
+    """Legs straight at both ends: the global path never bends them, and the plan
+    re-simulated with scipy is collision-free, within the limits and at the goal."""
+    world = world_from_dict(DOORWAY)
+    s = get_model("trident-snake")
+    start = (-3.0, 2.0, 0.5, 0.0, 0.0, 0.0)
+    goal = (6.5, -2.0, -2.0, 0.0, 0.0, 0.0)
+    g = plan_global(s, start, goal, 1e-6, world=world, time_limit=120, seed=3)
+    assert np.abs(np.array(g.waypoints)[:, 3:]).max() == 0.0
+    data = g.to_json()
+    q = resimulate(s, data["from"], data["segments"], samples=60)
+    assert np.linalg.norm(q[-1] - np.array(goal)) <= 1e-6
+    assert np.all(np.abs(q[:, 3:6]) <= 5 * math.pi / 6 + 1e-9)
+    assert independent_collision_free(q, DOORWAY)

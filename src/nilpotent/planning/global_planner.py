@@ -51,11 +51,15 @@ from nilpotent.errors import IntegrationError, PlanningError, SingularPointError
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
+from nilpotent.planning.simulation import simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
 from nilpotent.strict_json import json_safe
 
-__all__ = ["GlobalPlan", "Piece", "ompl_path", "plan_global", "plan_json", "steer_admissible"]
+__all__ = [
+    "GlobalPlan", "Piece", "ompl_path", "plan_global", "plan_json", "shape_held_path",
+    "shape_indices", "steer_admissible",
+]
 
 #: Largest tolerance at intermediate waypoints (the next piece starts from the state reached).
 MID_TOL = 0.05
@@ -67,11 +71,16 @@ PATH_CLEARANCE = 0.2
 PATH_END_ZONE = 1.0
 #: Default longest piece (Euclidean in configuration space) before steering.
 MAX_PIECE = 1.0
+#: Longest time OMPL's path simplification (shortcutting) may take.
+SIMPLIFY_SECONDS = 0.5
 #: Pieces are not halved below this length: then planning fails.
 MIN_PIECE = 1e-3
 #: Samples per segment when a piece's motion is checked, and when the whole plan is verified.
 CHECK_POINTS = 40
 VERIFY_POINTS = 100
+#: Samples per segment of the second, denser check of a piece whose samples are all
+#: admissible but whose margins between samples (half a step) were too wide.
+DENSE_CHECK_POINTS = 200
 #: The direct attempt (one nilpotent plan, the old behaviour) is made for goals this close
 #: (configuration-space Euclidean distance).
 DIRECT_RADIUS = 2.0
@@ -227,12 +236,15 @@ def ompl_path(
     seed: int | None = None,
     resolution: float = 0.05,
     valid: Callable[[np.ndarray], np.ndarray] | None = None,
+    held: Sequence[int] = (),
 ) -> list[np.ndarray]:
     """A collision-free configuration-space path from OMPL RRTConnect, simplified.
 
     ``resolution``: largest step (configuration-space units) at which OMPL checks
     straight motions between states.  ``valid``: the validity of a batch of
     configurations (default ``checker.valid``; ``checker`` also gives the box).
+    ``held``: indices of coordinates kept at ``x0``'s values all along (OMPL
+    samples only the others; ``xg`` must agree with ``x0`` there).
 
     Raises
     ------
@@ -246,8 +258,14 @@ def ompl_path(
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     if seed is not None:
         ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
-    n = len(x0)
+    full_n = len(x0)
+    held_set = set(int(j) for j in held)
+    if any(x0[j] != xg[j] for j in held_set):
+        raise ValueError("held coordinates must agree at the start and the goal")
+    free = np.array([j for j in range(full_n) if j not in held_set], dtype=int)
     lo, hi = _box(checker, x0, xg)
+    lo, hi = lo[free], hi[free]
+    n = len(free)
     space = ob.RealVectorStateSpace(n)
     bounds = ob.RealVectorBounds(n)
     for j in range(n):
@@ -258,8 +276,13 @@ def ompl_path(
 
     is_valid = checker.valid if valid is None else valid
 
+    def embed(values: Sequence[float]) -> np.ndarray:
+        q = x0.astype(float).copy()
+        q[free] = values
+        return q
+
     def state_valid(state: Any) -> bool:
-        q = np.array([state[j] for j in range(n)])
+        q = embed([state[j] for j in range(n)])
         return bool(is_valid(q[None, :])[0])
 
     setup.setStateValidityChecker(state_valid)
@@ -270,7 +293,7 @@ def ompl_path(
     start, goal = space.allocState(), space.allocState()
     # OMPL's stubs type allocState() as the abstract State; a real-vector state is indexable
     for j in range(n):
-        start[j], goal[j] = float(x0[j]), float(xg[j])  # pyright: ignore[reportIndexIssue]
+        start[j], goal[j] = float(x0[free[j]]), float(xg[free[j]])  # pyright: ignore[reportIndexIssue]
     setup.setStartAndGoalStates(start, goal)
     setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
     status = setup.solve(float(seconds))
@@ -280,12 +303,59 @@ def ompl_path(
             f"(status: {status.asString() if hasattr(status, 'asString') else status}); "
             "raise --time-limit, or check that start and goal are connected in the free space"
         )
-    setup.simplifySolution()
+    # shortcutting until it converges can take seconds of validity checks: bounded
+    setup.simplifySolution(float(min(SIMPLIFY_SECONDS, seconds)))
     path = setup.getSolutionPath()
     states = [path.getState(i) for i in range(path.getStateCount())]
-    pts = [np.array([s[j] for j in range(n)]) for s in states]  # pyright: ignore[reportIndexIssue]
+    pts = [embed([s[j] for j in range(n)]) for s in states]  # pyright: ignore[reportIndexIssue]
     pts[0], pts[-1] = x0.copy(), xg.copy()
     return pts
+
+
+def shape_indices(checker: Checker) -> tuple[int, ...]:
+    """Indices of the shape coordinates: those with box limits, other than ``x`` and ``y``
+    (the trident's joint angles ``φ_i``; none for the car with trailers)."""
+    assert checker.limits is not None
+    names = checker.system.coordinate_names
+    limited = {name for name, _, _ in checker.limits.bounds}
+    return tuple(j for j, name in enumerate(names) if name in limited and name not in ("x", "y"))
+
+
+def shape_held_path(
+    checker: Checker,
+    x0: np.ndarray,
+    xg: np.ndarray,
+    seconds: float,
+    seed: int | None,
+    valid: Callable[[np.ndarray], np.ndarray],
+    held: Sequence[int],
+) -> list[np.ndarray]:
+    """A path that moves the other coordinates with the ``held`` (shape) ones at the start's
+    values, then changes the shape to the goal's at the goal's pose (a last straight chord).
+
+    OMPL then samples only the body pose (a lower-dimensional, easier query), and the
+    steered pieces need no shape correction on the way: only the last piece does.
+
+    Raises
+    ------
+    PlanningError
+        The goal's pose with the start's shape, or the last chord, is not admissible
+        (under ``valid``), or OMPL finds no path within ``seconds``.
+    """
+    held = list(held)
+    xe = xg.copy()
+    xe[held] = x0[held]
+    if not valid(xe[None, :])[0]:
+        raise PlanningError("the goal's pose with the start's shape is not admissible")
+    if not _chord_valid(valid, xe, xg):
+        raise PlanningError("the shape cannot change at the goal's pose")
+    if _chord_valid(valid, x0, xe):
+        path = [x0.copy(), xe]
+    else:
+        path = ompl_path(checker, x0, xe, seconds, seed, valid=valid, held=held)
+    if float(np.linalg.norm(xg - xe)) > 0.0:
+        path.append(xg.copy())
+    return path
 
 
 def _densify(points: Sequence[np.ndarray], max_piece: float) -> list[np.ndarray]:
@@ -340,7 +410,16 @@ def steer_admissible(
         return None
     except (PlanningError, IntegrationError):
         return None
-    if not checker.valid_motion(p.trajectory.states):
+    states = p.trajectory.states
+    if checker.valid_motion(states):
+        return p
+    if not np.all(checker.valid(states)):
+        return None
+    # every sample is admissible, only the cover of the motion between samples (margins
+    # of half a step) failed: sample more densely (smaller steps, smaller margins)
+    _, dense = simulate_path(system, x, list(p.segments), DENSE_CHECK_POINTS,
+                             options.get("engine", "auto"))
+    if not checker.valid_motion(dense):
         return None
     return p
 
@@ -363,6 +442,7 @@ def plan_global(
     max_iterations: int = 30,
     clearance: float = 0.0,
     path_clearance: float = PATH_CLEARANCE,
+    hold_shape: bool = True,
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -401,6 +481,13 @@ def plan_global(
         steered motions of the pieces have room (Laumond's approximation needs
         a path with positive clearance; a path that grazes obstacles needs
         tiny pieces, whose number grows like ``clearance^{-r}`` for a system of step ``r``).
+    hold_shape:
+        Look for the global path first with the shape coordinates
+        (:func:`shape_indices`: the limited ones other than ``x``, ``y``) held at
+        the start's values, changing them to the goal's only at the goal's pose
+        (:func:`shape_held_path`; a quarter of the remaining time), then, if that
+        fails, in the whole configuration space.  A path whose shape wanders
+        forces every piece to correct it with loops of size ``√(piece length)``.
 
     Raises
     ------
@@ -472,9 +559,19 @@ def plan_global(
     if _chord_valid(path_valid, x0, xg):
         path = [x0, xg]
     else:
-        budget = max(0.1, 0.5 * (deadline - time.perf_counter()))
         t_ompl = time.perf_counter()
-        path = ompl_path(checker, x0, xg, budget, seed, valid=path_valid)
+        path = None
+        held = shape_indices(checker) if hold_shape else ()
+        if held:
+            # first with the shape held (body pose only), then in the whole space
+            budget = max(0.1, 0.25 * (deadline - time.perf_counter()))
+            try:
+                path = shape_held_path(checker, x0, xg, budget, seed, path_valid, held)
+            except PlanningError:
+                path = None
+        if path is None:
+            budget = max(0.1, 0.5 * (deadline - time.perf_counter()))
+            path = ompl_path(checker, x0, xg, budget, seed, valid=path_valid)
         planner_s = time.perf_counter() - t_ompl
     waypoints = _densify(path, max_piece)
     # 3. steer piece by piece, halving pieces whose motion is not admissible
@@ -499,10 +596,17 @@ def plan_global(
         if p is None or (final and not p.converged):
             off = float(np.linalg.norm(x - prev))
             if length == 0.0:
-                raise PlanningError(
-                    f"cannot steer back onto the path at {np.array2string(w, precision=3)} "
-                    f"from {off:.3g} away inside the free space and limits"
-                )
+                # cannot steer back onto the path: continue from the state reached when the
+                # straight chord from it to the next waypoint is admissible (the path is
+                # re-anchored there; every motion is still checked), else give up
+                targets.popleft()
+                if not targets or not _chord_valid(checker.valid, x, targets[0][0]):
+                    raise PlanningError(
+                        f"cannot steer back onto the path at {np.array2string(w, precision=3)} "
+                        f"from {off:.3g} away inside the free space and limits"
+                    )
+                prev = x.copy()
+                continue
             if off > max(tol, MID_TOL_FRACTION * length):
                 # the state reached is far off the path relative to this piece: back onto it
                 targets.appendleft((prev.copy(), halvings))

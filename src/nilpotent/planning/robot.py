@@ -78,6 +78,15 @@ class Robot:
         outline = self.system.geometry
         fn = None if outline is None else _lambdify(self.system, outline.expressions())
         object.__setattr__(self, "_fn", fn)
+        # the limited coordinates' indices and bounds, once (limit_margin is called for
+        # single configurations thousands of times by OMPL's validity checks)
+        names = self.system.coordinate_names
+        assert self.limits is not None
+        bounds = self.limits.bounds
+        object.__setattr__(self, "_limit_index", np.array([names.index(k) for k, _, _ in bounds],
+                                                          dtype=int))
+        object.__setattr__(self, "_limit_lo", np.array([lo for _, lo, _ in bounds], dtype=float))
+        object.__setattr__(self, "_limit_hi", np.array([hi for _, _, hi in bounds], dtype=float))
 
     @property
     def outline(self) -> Outline | None:
@@ -91,8 +100,10 @@ class Robot:
         """All outline expressions at ``q (N, n)``: shape ``(N, E)``."""
         assert self._fn is not None
         vals = self._fn(q.T)
-        return np.stack([np.broadcast_to(np.asarray(v, dtype=float), (q.shape[0],))
-                         for v in vals], axis=1)
+        out = np.empty((q.shape[0], len(vals)))
+        for i, v in enumerate(vals):
+            out[:, i] = v  # constants (e.g. a disc's radius) broadcast
+        return out
 
     def parts(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Shapely geometries ``(N, P)`` of the outline's parts and their radii ``(N, P)``.
@@ -165,10 +176,8 @@ class Robot:
         Non-negative iff every limit holds; ``+inf`` where there are no limits.
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
-        out = np.full(q.shape[0], np.inf)
-        names = self.system.coordinate_names
-        assert self.limits is not None
-        for name, lo, hi in self.limits.bounds:
-            j = names.index(name)
-            out = np.minimum(out, np.minimum(q[:, j] - lo, hi - q[:, j]))
-        return out
+        idx = self._limit_index  # type: ignore[attr-defined]
+        if idx.size == 0:
+            return np.full(q.shape[0], np.inf)
+        x = q[:, idx]
+        return np.minimum(x - self._limit_lo, self._limit_hi - x).min(axis=1)  # type: ignore[attr-defined]
