@@ -101,3 +101,97 @@ def test_threads_give_the_same_end_points(snake):
     two = integrate(snake, x0, inputs, engine="heyoka", threads=2)
     np.testing.assert_array_equal(one.final, two.final)
     np.testing.assert_array_equal(one.steps, two.steps)
+
+
+def test_a_trajectory_does_not_depend_on_its_batch(snake):
+    # rows with brackets (1,2) and (2,3) mixed in one batch (two specialised integrators)
+    # give bit-identical end points to the same rows integrated in batches of their own
+    rng = np.random.default_rng(8)
+    x0 = rng.uniform(-0.1, 0.1, (30, 6))
+    amps = rng.uniform(0.01, 0.3, 30)
+    ii = np.where(np.arange(30) % 3 == 0, 2, 1)
+    jj = np.where(np.arange(30) % 3 == 0, 3, 2)
+    mixed = integrate(snake, x0, bracket_inputs(3, ii, jj, amps), engine="heyoka")
+    for i, j in ((1, 2), (2, 3)):
+        rows = np.flatnonzero(ii == i)
+        alone = integrate(snake, x0[rows], bracket_inputs(3, i, j, amps[rows]),
+                          engine="heyoka")
+        np.testing.assert_array_equal(mixed.final[rows], alone.final)
+
+
+def test_threads_identical_with_failures_and_many_batches():
+    # dx/dt = u x^2 blows up at t = 1/x0: lanes with x0 > 1 fail in several SIMD batches,
+    # the others succeed; 1, 2 and 3 threads give bit-identical end points and steps
+    x = sp.Symbol("x")
+    cs = compile_fields([x], [[x**2]], name="riccati-threads")
+    rng = np.random.default_rng(4)
+    x0 = rng.uniform(0.05, 0.9, (203, 1))
+    x0[::17, 0] = 2.0  # blow-up before t = 1
+    runs = [integrate(cs, x0, _constant_input(1.0).broadcast(203), engine="heyoka",
+                      rtol=1e-12, atol=1e-12, bound=1e6, threads=t) for t in (1, 2, 3)]
+    fails = np.zeros(203, dtype=bool)
+    fails[::17] = True
+    for sol in runs:
+        assert np.all(sol.status[fails] != Status.SUCCESS)
+        assert np.all(sol.status[~fails] == Status.SUCCESS)
+        np.testing.assert_allclose(sol.final[~fails, 0],
+                                   x0[~fails, 0] / (1 - x0[~fails, 0]), rtol=1e-10)
+    for sol in runs[1:]:
+        np.testing.assert_array_equal(sol.status, runs[0].status)
+        np.testing.assert_array_equal(sol.final[~fails], runs[0].final[~fails])
+        np.testing.assert_array_equal(sol.steps[~fails], runs[0].steps[~fails])
+
+
+def test_lean_path_equals_general_path(snake):
+    # full SIMD batches (the lean loop) against the same trajectories one at a time (a
+    # padded batch: the general per-event path); the lanes are independent, so the end
+    # points and step counts are the same
+    rng = np.random.default_rng(5)
+    x0 = rng.uniform(-0.1, 0.1, (16, 6))
+    amps = rng.uniform(0.01, 0.3, 16)
+    lean = integrate(snake, x0, bracket_inputs(3, 1, 3, amps), engine="heyoka", threads=2)
+    for k in range(16):
+        one = integrate(snake, x0[k], bracket_inputs(3, 1, 3, amps[k]), engine="heyoka")
+        np.testing.assert_array_equal(lean.final[k], one.final[0])
+        assert lean.steps[k] == one.steps[0]
+
+
+def test_unused_parameters_left_out_change_nothing(snake):
+    # the integrator specialised to the inputs in use (u_2 = 0 dropped) against the one with
+    # every parameter: equal end points up to rounding
+    rng = np.random.default_rng(6)
+    x0 = rng.uniform(-0.1, 0.1, (16, 6))
+    sig = bracket_inputs(3, 1, 3, rng.uniform(0.01, 0.3, 16))
+    lean = integrate(snake, x0, sig, engine="heyoka")
+    tol = heyoka_engine.heyoka_tolerance(1e-10, 1e-12)
+    integ = heyoka_engine.taylor_integrator(snake, sig.harmonics, tol, None)
+    assert integ.parameters == 1 + 3 * (1 + 2 * sig.harmonics)
+    ta = integ.template
+    pars = heyoka_engine._parameters(sig)
+    out = np.empty((16, 6))
+    bs = integ.batch_size
+    for lo in range(0, 16, bs):
+        hi = min(lo + bs, 16)
+        lanes = lo + np.arange(bs) % (hi - lo)
+        ta.state[:] = x0[lanes].T
+        ta.pars[:] = pars[lanes, 0].T
+        ta.set_time(np.zeros(bs))
+        ta.propagate_until(np.full(bs, 2 * np.pi))
+        out[lo:hi] = ta.state[:, : hi - lo].T
+    assert np.abs(lean.final - out).max() < 1e-13
+
+
+def test_samples_at_start_and_end_take_the_lean_path_unchanged(snake):
+    # samples at 0 and at the end only (the lean loop) against samples that also stop
+    # half-way (the general path): the start and end samples agree; the end is the final
+    rng = np.random.default_rng(7)
+    x0 = rng.uniform(-0.1, 0.1, (37, 6))
+    inputs = bracket_inputs(3, 1, 2, rng.uniform(0.01, 0.3, 37))
+    end = float(inputs.total_durations.min())
+    lean = integrate(snake, x0, inputs, engine="heyoka", times=[0.0, end], threads=2)
+    general = integrate(snake, x0, inputs, engine="heyoka", times=[0.0, end / 2, end],
+                        threads=1)
+    np.testing.assert_array_equal(lean.samples[:, 0], x0)
+    np.testing.assert_array_equal(lean.samples[:, 1], lean.final)
+    assert np.abs(lean.final - general.samples[:, 2]).max() < 1e-12
+    np.testing.assert_array_equal(general.samples[:, 2], general.final)

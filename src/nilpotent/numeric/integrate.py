@@ -172,7 +172,8 @@ def integrate(
         For ``fixed``: also integrate with ``steps/2`` to estimate the error.
     threads:
         Number of numba threads (default: numba's setting), or of threads
-        running heyoka's SIMD batches (default 1).
+        running heyoka's SIMD batches (default: every core this process may
+        use; the results do not depend on it).
 
     Raises
     ------

@@ -292,8 +292,10 @@ def sweep(
     dask:
         ``None``: this process.  ``"local"``: a :class:`distributed.LocalCluster`
         on this machine (one single-threaded worker per core; started and
-        closed here).  A scheduler address (``"tcp://host:8786"``) or a
-        :class:`distributed.Client`: that cluster.  Needs the ``dask`` extra
+        closed here).  A scheduler address (``"tcp://host:8786"``), a
+        :class:`distributed.Client` or a cluster object
+        (:class:`distributed.deploy.Cluster`, e.g. dask-jobqueue's): that
+        cluster (docs/sweeps.md: the cluster recipe).  Needs the ``dask`` extra
         (:class:`~nilpotent.errors.MissingExtraError` otherwise).
     progress:
         Called as ``progress(done_pairs, total_pairs)`` after each chunk.

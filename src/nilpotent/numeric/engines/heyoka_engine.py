@@ -34,19 +34,34 @@ found beyond the bound, not the crossing point), or after ``max_steps`` steps
 no minimum step size: near a finite-time blow-up Taylor steps shrink until the
 state overflows, which takes a few hundred steps.
 
+Specialisation: runtime parameters that are 0 in every control of a batch
+(e.g. the constant terms and the unused input of a bracket motion) are left
+out of the compiled right-hand side, and so is a field whose input is 0
+throughout; adding or multiplying an exact 0 changes no value, so the results
+are those of the full integrator (up to rounding), at a fraction of the cost.
+
+Threads: SIMD batches are spread over ``threads`` threads (default: every core
+the process may use), each with its own copy of the integrator; heyoka releases
+the GIL while it propagates, and the Python work per batch is a handful of
+array copies (:func:`run_heyoka`).  Results do not depend on the thread count.
+
 Compilation (~0.4 s for the trident snake) happens on the first use of a
-system, ``K`` and tolerance; heyoka keeps the compiled code in its own on-disk
-cache (``$XDG_CACHE_HOME/heyoka``, default ``~/.cache/heyoka``), from which a
-new process loads it in ~0.02 s.  Integrators are kept per system (in the
-system's memo) for the rest of the process.
+system, ``K``, tolerance and set of parameters in use; heyoka keeps the
+compiled code in its own on-disk cache (``$XDG_CACHE_HOME/heyoka``, default
+``~/.cache/heyoka``), from which a new process loads it in ~0.02 s.
+Integrators are kept per system (in the system's memo) for the rest of the
+process.
 """
 
 from __future__ import annotations
 
 import copy
 import importlib.util
+import itertools
+import os
+from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import ModuleType
 from typing import Any, ClassVar
 
@@ -131,6 +146,10 @@ class TaylorIntegrator:
         SIMD lanes per step.
     order:
         Order of the Taylor method heyoka chose for ``tol``.
+    parameters:
+        How many leading runtime parameters of :func:`_parameters` it reads.
+    spares:
+        Copies of ``template`` not in use, reused by the threads of later calls.
     """
 
     template: Any
@@ -138,10 +157,19 @@ class TaylorIntegrator:
     tol: float
     batch_size: int
     order: int
+    parameters: int
+    spares: list[Any] = field(default_factory=list)
 
 
-def _rhs(system: CompiledSystem, harmonics: int) -> tuple[list[tuple[Any, Any]], int]:
-    """heyoka's ``[(x_j, dx_j/dt)]`` for ``Σ u_i(t) X_i(x)`` and the number of parameters."""
+def _rhs(
+    system: CompiledSystem, harmonics: int, used: tuple[bool, ...] | None = None
+) -> tuple[list[tuple[Any, Any]], int]:
+    """heyoka's ``[(x_j, dx_j/dt)]`` for ``Σ u_i(t) X_i(x)`` and the number of parameters.
+
+    ``used[p]`` False: parameter ``p`` is 0 in every control of the batch, and
+    its term is left out (adding or multiplying an exact 0 changes no value; a
+    field whose input is 0 throughout is left out entirely).  ``None``: all used.
+    """
     hy = _heyoka()
     n, m = system.n, system.m
     names = [f"q{k}" for k in range(n)]
@@ -152,42 +180,51 @@ def _rhs(system: CompiledSystem, harmonics: int) -> tuple[list[tuple[Any, Any]],
     tau = hy.time
     cosk = [hy.cos(k * hy.par[0] * tau) for k in range(1, harmonics + 1)]
     sink = [hy.sin(k * hy.par[0] * tau) for k in range(1, harmonics + 1)]
-    inputs = []
+    npar = 1 + m * (1 + 2 * harmonics)
+    use = (True,) * npar if used is None else used
+    inputs: list[Any] = []
     idx = 1
     for _ in range(m):
-        terms = [hy.par[idx]]
+        terms = [hy.par[idx]] if use[idx] else []
         idx += 1
         for k in range(harmonics):
-            terms += [hy.par[idx] * cosk[k], hy.par[idx + 1] * sink[k]]
+            if use[idx]:
+                terms.append(hy.par[idx] * cosk[k])
+            if use[idx + 1]:
+                terms.append(hy.par[idx + 1] * sink[k])
             idx += 2
-        inputs.append(hy.sum(terms))
+        inputs.append(hy.sum(terms) if terms else None)
     rhs = []
     for j in range(n):
         terms = []
         for i in range(m):
             f = system.fields[i][j]
-            if f == 0:
+            if f == 0 or inputs[i] is None:
                 continue
             terms.append(inputs[i] if f == 1 else inputs[i] * hy.from_sympy(f, smap))
         rhs.append(hy.sum(terms) if terms else hy.expression(0.0))
     return list(zip(hv, rhs, strict=True)), idx
 
 
-def taylor_integrator(system: CompiledSystem, harmonics: int, tol: float) -> TaylorIntegrator:
+def taylor_integrator(
+    system: CompiledSystem, harmonics: int, tol: float, used: tuple[bool, ...] | None = None
+) -> TaylorIntegrator:
     """The heyoka integrator of ``system`` for inputs with ``harmonics`` harmonics at ``tol``.
 
-    Compiled on the first call (LLVM, in memory), then kept in the system's memo.
+    ``used``: which runtime parameters may be nonzero (:func:`_rhs`; ``None``:
+    all).  Compiled on the first call (LLVM, in memory; heyoka's on-disk cache
+    across processes), then kept in the system's memo.
     """
-    key = ("heyoka", int(harmonics), float(tol))
+    key = ("heyoka", int(harmonics), float(tol), used)
     memo = system._memo  # the CompiledSystem's per-process cache
     if key not in memo:
         hy = _heyoka()
-        sysd, npar = _rhs(system, int(harmonics))
+        sysd, _ = _rhs(system, int(harmonics), used)
         bs = int(hy.recommended_simd_size())
-        ta = hy.taylor_adaptive_batch(
-            sysd, np.zeros((system.n, bs)), tol=float(tol), pars=np.zeros((npar, bs))
-        )
-        memo[key] = TaylorIntegrator(ta, int(harmonics), float(tol), bs, int(ta.order))
+        # heyoka sizes the parameters by the largest index the expressions use
+        ta = hy.taylor_adaptive_batch(sysd, np.zeros((system.n, bs)), tol=float(tol))
+        memo[key] = TaylorIntegrator(ta, int(harmonics), float(tol), bs, int(ta.order),
+                                     int(ta.pars.shape[0]))
     return memo[key]
 
 
@@ -202,6 +239,26 @@ def _parameters(sig: Signal) -> np.ndarray:
         [sig.omegas[..., None], per_input.reshape(b, s, m * (1 + 2 * k))],
         axis=2,
     )
+
+
+def default_threads() -> int:
+    """The cores this process may run on (``os.sched_getaffinity``; else ``os.cpu_count()``)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _borrow(integ: TaylorIntegrator) -> Any:
+    """A private copy of ``integ``'s integrator (reused across calls; see :func:`_give_back`)."""
+    try:
+        return integ.spares.pop()
+    except IndexError:
+        return copy.deepcopy(integ.template)  # ~2 ms: compiled code is shared, not rebuilt
+
+
+def _give_back(integ: TaylorIntegrator, ta: Any) -> None:
+    integ.spares.append(ta)
 
 
 def run_heyoka(
@@ -220,47 +277,156 @@ def run_heyoka(
 
     ``final`` ``(B, n)``; ``samples`` ``(B, T, n)`` at the global times ``ts``
     (NaN past a stop); ``info`` ``(B, 4)``: status code, steps, rejected steps
-    (0), error estimate (NaN).  ``threads`` SIMD batches run at once, each
-    thread on its own copy of the integrator (default 1: heyoka releases the
-    GIL while it integrates, but the Python work between batches does not, and
-    two threads measured no faster than one).
+    (0), error estimate (NaN).
+
+    Threads: ``threads`` (default :func:`default_threads`, every core this
+    process may use) threads each own a copy of the integrator and take SIMD
+    batches from a shared counter; heyoka releases the GIL while it
+    propagates.  Every batch starts from a fully reset integrator (state,
+    parameters, time), so the results do not depend on the number of threads
+    or on which thread ran a batch.
+
+    Each trajectory runs on the integrator specialised to the parameters its
+    own control uses (:func:`_rhs`): trajectories are grouped by that set, so
+    a trajectory's result does not depend on the others in the batch.
+
+    The common case (one segment, sample times only at 0 and at the end, full
+    SIMD batches) runs a lean loop: load the batch, propagate, store the end
+    state, the steps and the lanes' end times; afterwards one vectorised check finds batches in
+    which a lane failed (stopped early, too many steps, non-finite, beyond
+    ``bound``) and integrates those again on the general path
+    (:func:`_run_chunk`), which stops and reports the failing lanes.
     """
-    integ = taylor_integrator(system, sig.harmonics, heyoka_tolerance(rtol, atol))
-    batch, n = xs.shape
-    bs = integ.batch_size
     pars = _parameters(sig)
     ends = np.cumsum(sig.durations, axis=1)
-    segs = sig.segment_count
+    tol = heyoka_tolerance(rtol, atol)
+    row_used = np.any(pars[..., 1:] != 0, axis=1)  # (B, npar - 1)
+    if row_used.shape[0] == 0 or bool(np.all(row_used == row_used[0])):
+        kinds, which = row_used[:1], np.zeros(row_used.shape[0], dtype=np.int64)
+    else:  # np.unique on rows sorts them: ~2 µs a row, only when the rows differ
+        kinds, which = np.unique(row_used, axis=0, return_inverse=True)
+        which = np.ravel(which)
+    groups = []
+    for g, kind in enumerate(kinds):
+        used = (True, *(bool(u) for u in kind))
+        rows = np.flatnonzero(which == g) if kinds.shape[0] > 1 else None
+        groups.append((taylor_integrator(system, sig.harmonics, tol, used), rows))
+    if len(groups) == 1:
+        return _run_group(groups[0][0], xs, pars, ends, ts, max_steps, bound, threads)
+    final = np.empty(xs.shape)
+    samples = np.empty((xs.shape[0], ts.size, xs.shape[1]))
+    info = np.empty((xs.shape[0], 4))
+    for integ, rows in groups:
+        final[rows], samples[rows], info[rows] = _run_group(
+            integ, xs[rows], pars[rows], ends[rows], ts, max_steps, bound, threads)
+    return final, samples, info
+
+
+def _run_group(
+    integ: TaylorIntegrator,
+    xs: np.ndarray,
+    pars: np.ndarray,
+    ends: np.ndarray,
+    ts: np.ndarray,
+    max_steps: int,
+    bound: float,
+    threads: int | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`run_heyoka` for trajectories that all run on ``integ``.
+
+    ``pars`` ``(B, S, npar)`` (:func:`_parameters`), ``ends`` ``(B, S)`` the
+    segments' global end times.
+    """
+    pars = np.ascontiguousarray(pars[..., : integ.parameters])
+    batch, n = xs.shape
+    bs = integ.batch_size
+    segs = ends.shape[1]
+    final = np.full((batch, n), np.nan)
+    samples = np.full((batch, ts.size, n), np.nan)
+    info = np.zeros((batch, 4))
+    info[:, 3] = np.nan
+    full = batch // bs
+    chunks = [(c, min(c + bs, batch)) for c in range(0, batch, bs)]
+    hy = _heyoka()
+    outcomes = (hy.taylor_outcome.time_limit, hy.taylor_outcome.step_limit)
+
     # per trajectory: the S segment ends and the T sample times, in time order
     evt_time = np.concatenate([ends, np.broadcast_to(ts, (batch, ts.size))], axis=1)
     evt_kind = np.broadcast_to(np.arange(segs + ts.size), evt_time.shape)
     order = np.argsort(evt_time, axis=1, kind="stable")
     evt_time = np.take_along_axis(evt_time, order, 1)
     evt_kind = np.take_along_axis(evt_kind, order, 1)
-    final = np.full((batch, n), np.nan)
-    samples = np.full((batch, ts.size, n), np.nan)
-    info = np.zeros((batch, 4))
-    info[:, 3] = np.nan
-    chunks = [(c, min(c + bs, batch)) for c in range(0, batch, bs)]
-    # default one thread: the per-batch Python work holds the GIL, and two threads
-    # measured no faster than one on the trident snake (~190k trajectories/s)
-    workers = max(1, min(int(threads or 1), len(chunks)))
-    groups = [chunks[w::workers] for w in range(workers)]
+    # sample times at the start (0) or at every trajectory's end need no stop on the way
+    at_start = ts == 0.0
+    at_end = np.all(ends[:, -1:] == ts[None, :], axis=0) & ~at_start
+    lean = segs == 1 and full > 0 and bool(np.all(at_start | at_end))
+    jobs: list[tuple[int, int]] = chunks
+    # the lean loop's arrays over the full SIMD batches (empty when it does not run)
+    lean_rows = full * bs if lean else 0
+    x_t = np.ascontiguousarray(xs[:lean_rows].T)
+    par_t = np.ascontiguousarray(pars[:lean_rows, 0].T)
+    target = np.ascontiguousarray(ends[:lean_rows, 0])
+    final_t = np.empty((n, lean_rows))
+    reached = np.empty(lean_rows)
+    steps = np.empty(lean_rows, dtype=np.int64)
 
-    hy = _heyoka()
-    outcomes = (hy.taylor_outcome.time_limit, hy.taylor_outcome.step_limit)
+    def lean_work(ta: Any, counter: Iterator[int]) -> None:
+        state, par = ta.state, ta.pars
+        zero = np.zeros(bs)
+        for k in counter:
+            if k >= full:
+                return
+            lo, hi = k * bs, (k + 1) * bs
+            state[:] = x_t[:, lo:hi]
+            par[:] = par_t[:, lo:hi]
+            ta.set_time(zero)
+            ta.propagate_until(target[lo:hi], max_steps=max_steps)
+            steps[lo:hi] = [r[3] for r in ta.propagate_res]
+            reached[lo:hi] = ta.time
+            final_t[:, lo:hi] = state
 
-    def work(group: list[tuple[int, int]]) -> None:
-        ta = copy.deepcopy(integ.template)
-        for lo, hi in group:
+    def general_work(ta: Any, counter: Iterator[int]) -> None:
+        for k in counter:
+            if k >= len(jobs):
+                return
+            lo, hi = jobs[k]
             _run_chunk(ta, lo, hi, xs, pars, evt_time, evt_kind, segs, final, samples, info,
                        max_steps, bound, outcomes)
 
-    if workers == 1:
-        work(groups[0])
-    else:
-        with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(work, groups))
+    def run_all(work: Any, count: int) -> None:
+        workers = max(1, min(int(threads or default_threads()), count))
+        counter = itertools.count()  # next() on it is atomic: threads share it safely
+        copies = [_borrow(integ) for _ in range(workers)]
+        try:
+            if workers == 1:
+                work(copies[0], counter)
+            else:
+                with ThreadPoolExecutor(workers) as pool:
+                    for fut in [pool.submit(work, ta, counter) for ta in copies]:
+                        fut.result()
+        finally:
+            for ta in copies:
+                _give_back(integ, ta)
+
+    if not lean:
+        run_all(general_work, len(jobs))
+        return final, samples, info
+    run_all(lean_work, full)
+    final[: full * bs] = final_t.T
+    info[: full * bs, 1] = steps
+    x_end = final[: full * bs]
+    with np.errstate(invalid="ignore"):
+        bad = ((reached != target) | (steps >= max_steps)
+               | ~(np.abs(x_end) <= bound).all(axis=1))  # NaN fails <= bound
+    redo = sorted(set((np.flatnonzero(bad) // bs).tolist()))
+    if ts.size:
+        samples[: full * bs, at_start] = xs[: full * bs, None]
+        samples[: full * bs, at_end] = x_end[:, None]
+        for k in redo:  # the general path fills these, NaN past a stop
+            samples[k * bs: (k + 1) * bs] = np.nan
+    jobs = [(k * bs, (k + 1) * bs) for k in redo] + chunks[full:]
+    if jobs:  # failed batches and the last, partial one: the general path
+        run_all(general_work, len(jobs))
     return final, samples, info
 
 
