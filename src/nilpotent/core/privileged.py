@@ -758,6 +758,13 @@ def privileged_coordinates(
             f"{und.get('reason', '')}; no privileged coordinates (search longer brackets "
             "with max_length, CLI --max-length)"
         )
+    if f.growth_vector_known_up_to is not None:
+        raise ComputationLimitError(
+            f"{sys.name!r} is bracket-generating at the point (proved through its orbit), but "
+            f"its growth vector there is known up to bracket length "
+            f"{f.growth_vector_known_up_to} only, and privileged coordinates need all the "
+            "weights (search longer brackets with max_length, CLI --max-length)"
+        )
     if not f.bracket_generating:
         raise NotBracketGeneratingError(
             f"{sys.name!r} is not bracket-generating at the point: its brackets span "
