@@ -236,3 +236,19 @@ def test_singular_locus_json_keys(run_cli):
     assert j["singular_locus_equations"] == ["l + 1"]
     assert "l + 1 = 0" in j["singular_locus_statement"]
     assert j["singular_locus_determinants"][0]["frame"] == ["X1", "X2", "[X1,X2]"]
+
+
+def test_singular_locus_of_a_huge_determinant_is_refused_not_simplified_for_minutes():
+    """car-trailers:4's frame determinant expands to millions of characters: the
+    trigonometric normal form is refused with the budget named, and the search for an
+    invariant hypersurface at a point concludes nothing instead of hanging."""
+    from nilpotent.core.singular import SINGULAR_DETERMINANT_MAX_CHARS, invariant_hypersurface
+    from nilpotent.errors import ComputationLimitError
+    from nilpotent.models import get_model
+
+    system = get_model("car-trailers:4")
+    with pytest.raises(ComputationLimitError, match="SINGULAR_DETERMINANT_MAX_CHARS"):
+        singular_set(system, (2, 3, 4, 5, 6, 7))
+    assert SINGULAR_DETERMINANT_MAX_CHARS < 5_000_000
+    point = [sp.Integer(0)] * system.n
+    assert invariant_hypersurface(system, point, (2, 3, 4, 5, 6, 7)) is None
