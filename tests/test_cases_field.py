@@ -72,11 +72,14 @@ def test_martinet_k12_step_13(run_cli):
 
 def test_an_exhausted_search_is_undetermined_never_negative(run_cli):
     j = _analysis(run_cli, str(CASES / "fail-martinet-k12.toml"), "--max-length", "5")
-    assert j["bracket_generating"] is None and j["regular"] is None
-    assert j["undetermined"]["max_length"] == 5
+    # the search up to length 5 stops short of R^3; bracket generation is then proved
+    # through the orbit (never "not bracket-generating"), the growth vector stays a prefix
+    assert j["bracket_generating"] is True and j["certified_by"]["method"] == "orbit"
+    assert j["undetermined"]["max_length"] == 5 and j["growth_vector_known_up_to"] == 5
+    assert j["growth_vector"] == [2] * 5 and j["regular"] is False
     status, out, _ = run_cli("analyze", str(CASES / "fail-martinet-k12.toml"),
                              "--max-length", "5")
-    assert status == 0 and "UNDETERMINED" in out and "NO" not in out
+    assert status == 0 and "known up to bracket length 5" in out and "NO" not in out
     status, out, _ = run_cli("approximate", str(CASES / "fail-martinet-k12.toml"),
                              "--max-length", "5", "--json")
     assert status == 2 and json.loads(out)["error"]["kind"] == "computation-limit"
@@ -220,7 +223,11 @@ def test_hostile_expansions_and_searches_end_within_a_budget(run_cli):
                              "--json")
     assert status == 2 and "--max-length" in json.loads(out)["error"]["message"]
     j = _analysis(run_cli, str(CASES / "stall40.toml"))
-    assert j["bracket_generating"] is None and j["undetermined"]["max_length"] >= 12
+    # x**40: the search stops within its budget; the orbit (the flow of X1 = d/dx, exact)
+    # proves bracket generation, the growth vector stays the searched prefix
+    assert j["bracket_generating"] is True and j["undetermined"]["max_length"] >= 12
+    assert j["certified_by"]["exact_flow"] is True
+    assert j["growth_vector"] == [2] * j["growth_vector_known_up_to"]
 
 
 def test_singular_locus_json_keys(run_cli):
@@ -229,3 +236,19 @@ def test_singular_locus_json_keys(run_cli):
     assert j["singular_locus_equations"] == ["l + 1"]
     assert "l + 1 = 0" in j["singular_locus_statement"]
     assert j["singular_locus_determinants"][0]["frame"] == ["X1", "X2", "[X1,X2]"]
+
+
+def test_singular_locus_of_a_huge_determinant_is_refused_not_simplified_for_minutes():
+    """car-trailers:4's frame determinant expands to millions of characters: the
+    trigonometric normal form is refused with the budget named, and the search for an
+    invariant hypersurface at a point concludes nothing instead of hanging."""
+    from nilpotent.core.singular import SINGULAR_DETERMINANT_MAX_CHARS, invariant_hypersurface
+    from nilpotent.errors import ComputationLimitError
+    from nilpotent.models import get_model
+
+    system = get_model("car-trailers:4")
+    with pytest.raises(ComputationLimitError, match="SINGULAR_DETERMINANT_MAX_CHARS"):
+        singular_set(system, (2, 3, 4, 5, 6, 7))
+    assert SINGULAR_DETERMINANT_MAX_CHARS < 5_000_000
+    point = [sp.Integer(0)] * system.n
+    assert invariant_hypersurface(system, point, (2, 3, 4, 5, 6, 7)) is None

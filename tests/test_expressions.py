@@ -368,3 +368,47 @@ def test_power_towers_are_refused_quickly(height, base):
     text = "**".join([str(base)] * height)
     with pytest.raises(ExpressionError):
         parse_expression(text, {})
+
+
+_X, _Y, _Z = sp.symbols("x y z")
+_NAMES = {"x": _X, "y": _Y, "z": _Z}
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    coeffs=st.lists(
+        st.one_of(
+            st.fractions(max_denominator=50).map(lambda f: sp.Rational(f.numerator, f.denominator)),
+            st.floats(-1e6, 1e6, allow_nan=False).map(sp.Float),
+        ),
+        min_size=1, max_size=6),
+    exps=st.lists(st.tuples(*[st.integers(-3, 4)] * 3), min_size=1, max_size=6),
+    keep=st.booleans(),
+)
+def test_linear_time_printer_parses_back_to_an_equal_expression(coeffs, exps, keep):
+    from nilpotent.core.expressions import _PRINTABLE_FUNCTIONS
+    from nilpotent.core.linear_printer import print_linear
+
+    terms = []
+    shifted = (_X - sp.Rational(1, 3), _Y + sp.pi, sp.cos(_Z) + 2)
+    for c, e in zip(coeffs, exps, strict=False):
+        factors = [s**a for s, a in zip(shifted, e, strict=True) if a]
+        terms.append(sp.Mul(c, *factors, evaluate=not keep))
+    expr = sp.Add(*terms, evaluate=not keep)
+    back = parse_expression(print_linear(expr, _PRINTABLE_FUNCTIONS), _NAMES)
+    if not expr.atoms(sp.Float):
+        assert sp.expand(back - expr) == 0
+    at = {_X: sp.Rational(3, 10), _Y: sp.Rational(7, 10), _Z: sp.Rational(1, 5)}
+    a, b = complex(expr.xreplace(at).evalf(30)), complex(back.xreplace(at).evalf(30))
+    assert abs(a - b) <= 1e-12 * max(1.0, abs(a))
+
+
+def test_large_expressions_are_printed_by_the_linear_printer(monkeypatch):
+    import nilpotent.core.expressions as ex
+
+    big = sp.expand((_X + 2 * _Y - sp.Rational(1, 3) * _Z + 1) ** 9)
+    text = format_expression(big)
+    assert len(sp.Add.make_args(big)) > 200
+    monkeypatch.setattr(ex, "MAX_LENGTH", 10**6)
+    monkeypatch.setattr(ex, "MAX_TERMS", 10**6)
+    assert sp.expand(parse_expression(text, _NAMES) - big) == 0

@@ -107,8 +107,10 @@ def test_max_length_bounds_the_scan_at_singular_points():
     full = analyze(s)
     assert full.bracket_generating and full.step == k + 1 and full.weights == (1, 1, k + 1)
     short = analyze(s, max_length=4)
-    assert not short.bracket_generating and short.max_length == 4
-    assert short.growth_vector == (2,) and not short.regular
+    # ... and proves bracket generation through the orbit (the flow of X1 = ∂1 leaves x1 = 0)
+    assert short.bracket_generating and short.certified_by is not None and short.max_length == 4
+    assert short.growth_vector == (2, 2, 2, 2) and short.growth_vector_known_up_to == 4
+    assert short.regular is False
     # regular points never need more than the generic step, whatever max_length says
     assert analyze(ENGEL, max_length=2).growth_vector == (2, 3, 4)
 

@@ -43,7 +43,9 @@ def print_analysis(system, filtration) -> None:
     )
     print_heading(console, system.name, f" at ({literal(pt, 2000)})")
     reached = filtration.growth_vector[-1] if filtration.growth_vector else 0
-    if filtration.bracket_generating:
+    if filtration.bracket_generating and filtration.certified_by is not None:
+        verdict = f"yes, {filtration.certified_by.statement()}"
+    elif filtration.bracket_generating:
         verdict = "yes"
     elif filtration.bracket_generating is False and filtration.invariant_hypersurface is not None:
         verdict = (
@@ -68,7 +70,13 @@ def print_analysis(system, filtration) -> None:
             f"bits; search further with --max-length)",
             markup=False,
         )
-    console.print(f"growth vector: ({', '.join(map(str, filtration.growth_vector))})")
+    growth = f"({', '.join(map(str, filtration.growth_vector))})"
+    if filtration.growth_vector_known_up_to is not None:
+        growth += (
+            f", known up to bracket length {filtration.growth_vector_known_up_to} only "
+            "(where it reaches n is unknown)"
+        )
+    console.print(f"growth vector: {growth}", markup=False)
     console.print(f"weights: ({', '.join(map(str, filtration.weights))})   step: {filtration.step}")
     nearby = ", ".join(map(str, filtration.generic_growth_vector))
     if filtration.regular is None:

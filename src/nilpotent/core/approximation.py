@@ -29,12 +29,12 @@ import symengine as se
 import sympy as sp
 
 from nilpotent import typeset
+from nilpotent.core.exponential_map import exponential_grading
 from nilpotent.core.filtration import Filtration
 from nilpotent.core.privileged import (
     PrivilegedCoordinates,
     _Context,
     coordinate_orders,
-    exponential_grading,
     privileged_coordinates,
 )
 from nilpotent.core.spans import Decision, ExprVector, MeasuredSpan, Span

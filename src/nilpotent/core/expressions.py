@@ -41,6 +41,7 @@ from collections.abc import Callable, Mapping, Sequence
 import sympy as sp
 from sympy.printing.str import StrPrinter
 
+from nilpotent.core.linear_printer import print_linear
 from nilpotent.errors import ComputationLimitError, ExpressionError
 
 __all__ = [
@@ -472,8 +473,24 @@ class _GrammarPrinter(StrPrinter):
 _PRINTER = _GrammarPrinter({"order": None})
 
 
-def _check_printable(expr: sp.Basic) -> None:
-    for node in sp.preorder_traversal(expr):
+SMALL_EXPRESSION_NODES = 2_000
+"""Expressions with more nodes are printed by the linear-time printer (``print_linear``)."""
+
+
+def _check_printable(expr: sp.Basic) -> int:
+    """Refuse what the grammar cannot write; return the number of nodes of ``expr``."""
+    nodes = 0
+    stack = [expr]
+    while stack:
+        node = stack.pop()
+        nodes += 1
+        if isinstance(node, sp.Add | sp.Mul | sp.Pow):
+            stack.extend(node.args)
+            continue
+        if isinstance(node, sp.Integer | sp.Rational):
+            continue
+        if isinstance(node, sp.Function):
+            stack.extend(node.args)
         if isinstance(node, sp.Symbol):
             name = node.name
             if (not name.isidentifier() or keyword.iskeyword(name) or name in RESERVED_NAMES
@@ -494,6 +511,7 @@ def _check_printable(expr: sp.Basic) -> None:
             raise ExpressionError(
                 f"cannot write {expr} in the expression grammar: {type(node).__name__} "
                 f"({node})")
+    return nodes
 
 
 def format_expression(expr: sp.Basic | int | float) -> str:
@@ -531,8 +549,10 @@ def format_expression(expr: sp.Basic | int | float) -> str:
         expr = sp.Float(expr)
     if not isinstance(expr, sp.Basic):
         raise ExpressionError(f"cannot write {expr!r} in the expression grammar")
-    _check_printable(expr)
+    nodes = _check_printable(expr)
     try:
+        if nodes > SMALL_EXPRESSION_NODES:
+            return print_linear(expr, _PRINTABLE_FUNCTIONS)
         return _PRINTER.doprint(expr)
     except ValueError as exc:  # an integer past Python's 4300-digit int-to-str limit
         if "digits" not in str(exc):

@@ -50,6 +50,7 @@ from nilpotent.core.brackets import (
     word_values_at,
 )
 from nilpotent.core.expressions import as_expr
+from nilpotent.core.orbit import ORBIT_TIME_BUDGET, OrbitCertificate, certify_by_orbit
 from nilpotent.core.spans import (
     START_PRECISION_BITS,
     Decision,
@@ -92,7 +93,8 @@ class Filtration:
     weights:
         $w_1 \\le \\dots$, $w_j = s$ for $n_{s-1} < j \\le n_s$ (one per frame word).
     step:
-        $r(p)$, the length of ``growth_vector``.
+        $r(p)$, the length of ``growth_vector`` (when ``growth_vector_known_up_to``
+        is set, only the length of the proved prefix: $r(p)$ is larger).
     frame:
         Adapted frame: Hall words $Y_1, \\dots$ with $|Y_j| = w_j$ whose values at
         ``p`` form a basis of $\\Delta^s(p)$ for every $s$.
@@ -119,6 +121,15 @@ class Filtration:
         polynomial $g$ with $g(p) = 0$, $\\nabla g(p) \\ne 0$ whose zero set is
         invariant under every field, proving ``bracket_generating`` false
         (:func:`nilpotent.core.singular.invariant_hypersurface`); else None.
+    certified_by:
+        When the bracket search at ``p`` ended short of $n$ but the brackets
+        were proved to span $\\mathbb{R}^n$ at a point of the orbit of ``p``
+        (hence at ``p``, by Nagano's orbit theorem for analytic fields): the
+        :class:`~nilpotent.core.orbit.OrbitCertificate`; else None.
+    growth_vector_known_up_to:
+        None when ``growth_vector`` is complete; else the bracket length up to
+        which it is proved (it is then a prefix: the lengths at which the span
+        reaches $n$ are unknown, see ``undetermined``).
     """
 
     system: ControlSystem
@@ -135,6 +146,8 @@ class Filtration:
     max_length: int = 0
     undetermined: Mapping[str, object] | None = None
     invariant_hypersurface: sp.Expr | None = None
+    certified_by: OrbitCertificate | None = None
+    growth_vector_known_up_to: int | None = None
 
     @property
     def frame_names(self) -> tuple[str, ...]:
@@ -184,6 +197,12 @@ class Filtration:
                 if self.invariant_hypersurface is not None
                 else None
             ),
+            "certified_by": (
+                self.certified_by.to_json(sys.coordinate_names)
+                if self.certified_by is not None
+                else None
+            ),
+            "growth_vector_known_up_to": self.growth_vector_known_up_to,
         }
 
 
@@ -449,14 +468,11 @@ def analyze(
                     break
                 limit += 1
     limit = s
+    scanned = list(growth)  # n_s(p) for s <= limit (the last a lower bound if stopped_by)
     while len(growth) > 1 and growth[-1] == growth[-2] and not unsure:
         growth.pop()
     growth_t = tuple(growth)
-    weights = tuple(
-        k
-        for k, (before, after) in enumerate(zip((0, *growth_t), growth_t, strict=False), start=1)
-        for _ in range(after - before)
-    )
+    weights = _weights(growth_t)
     bracket_generating: bool | None
     undetermined: dict | None = None
     if span.rank == n:
@@ -467,7 +483,12 @@ def analyze(
         bracket_generating = None
     certain = not unsure and span.rank == final
     invariant = None
-    if bracket_generating is None and not unsure:
+    certificate = None
+    if bracket_generating is None and final == n:
+        # the orbit first: cheap, and where it succeeds no hypersurface can be invariant
+        left = max(time_budget - (time.monotonic() - started), 0.0)
+        certificate = certify_by_orbit(sys, p, time_budget=min(max(left, 5.0), ORBIT_TIME_BUDGET))
+    if bracket_generating is None and not unsure and certificate is None:
         from nilpotent.core.singular import invariant_hypersurface
 
         invariant = invariant_hypersurface(sys, p, generic)
@@ -503,6 +524,25 @@ def analyze(
     regular: bool | None = growth_t == generic if certain else None
     if invariant is not None:
         regular = False  # the brackets span R^n nearby, never at p
+    # the lengths s whose n_s(p) is proved (the last scanned one only if its scan ended)
+    proved = min(min(unsure, default=limit + 1) - 1, limit - 1 if stopped_by else limit)
+    if regular is None and any(
+        scanned[k] < generic[min(k, len(generic) - 1)] for k in range(min(proved, len(scanned)))
+    ):
+        regular = False  # a proved n_s(p) below the generic n_s
+    known_up_to = None
+    if certificate is not None:
+        bracket_generating = True
+        known_up_to = proved
+        growth_t = tuple(scanned[:known_up_to])
+        weights = _weights(growth_t)
+        frame = [w for w in frame if word_length(w) <= known_up_to]
+        undetermined = dict(undetermined or {})
+        undetermined["reason"] = (
+            f"the growth vector at the point is known up to bracket length {known_up_to} only "
+            f"({growth_t[-1] if growth_t else 0} of {n} dimensions); bracket generation was "
+            f"proved through the orbit instead ({undetermined.get('reason', '')})"
+        )
     frame_values = word_values_at(sys, frame, p) if frame else ()
     return Filtration(
         system=sys,
@@ -519,6 +559,17 @@ def analyze(
         max_length=limit,
         undetermined=undetermined,
         invariant_hypersurface=invariant,
+        certified_by=certificate,
+        growth_vector_known_up_to=known_up_to,
+    )
+
+
+def _weights(growth: tuple[int, ...]) -> tuple[int, ...]:
+    """$w_j = s$ for $n_{s-1} < j \\le n_s$."""
+    return tuple(
+        k
+        for k, (before, after) in enumerate(zip((0, *growth), growth, strict=False), start=1)
+        for _ in range(after - before)
     )
 
 

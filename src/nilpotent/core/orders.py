@@ -25,6 +25,7 @@ from nilpotent.core.brackets import (
 )
 from nilpotent.core.expressions import as_expr
 from nilpotent.core.system import ControlSystem
+from nilpotent.core.taylor import Poly, ZeroTest, lie_derivative, weighted_degree
 from nilpotent.errors import OptionError, PointError
 
 Order = int | float
@@ -229,3 +230,39 @@ def field_order(
         expr = comp.as_expr() if isinstance(comp, sp.Poly) else comp
         best = min(best, weighted_order(expr, names, weights) - w)
     return best
+
+
+# --- orders of polynomial coordinates (used by the certificate of privileged.py) ----
+
+
+def low_order_terms(
+    jets: Sequence[Sequence[Poly]], weights: Sequence[int], zero: ZeroTest
+) -> dict[int, int]:
+    """For each coordinate j with a term of weighted degree < w_j − 1: that least degree."""
+    low: dict[int, int] = {}
+    for comps in jets:
+        for j, comp in enumerate(comps):
+            for mono, c in comp.terms.items():
+                d = weighted_degree(mono, weights)
+                if d < weights[j] - 1 and not zero(c):
+                    low[j] = min(low.get(j, d), d)
+    return low
+
+
+def chain_order_homogeneous(hat: Sequence[Sequence[Poly]], j: int, w: int, zero: ZeroTest) -> bool:
+    """Whether some $\\hat X_{i_1}\\cdots\\hat X_{i_w} y_j$ is nonzero (a constant)."""
+    n = len(hat[0])
+    level: dict[frozenset, Poly] = {}
+    f = Poly.variable(n, j)
+    level[frozenset(f.terms.items())] = f
+    for _ in range(w):
+        nxt: dict[frozenset, Poly] = {}
+        for g in level.values():
+            for X in hat:
+                h = lie_derivative(X, g).drop_zeros(zero)
+                if h.terms:
+                    nxt.setdefault(frozenset(h.terms.items()), h)
+        level = nxt
+        if not level:
+            return False
+    return any(not zero(g.value_at_zero()) for g in level.values())

@@ -66,9 +66,14 @@ import symengine as se
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.brackets import word_field_symengine
+from nilpotent.core.exponential_map import (
+    exponential_map,
+    first_kind_map,
+    from_exponential_map,
+)
 from nilpotent.core.expressions import as_expr
 from nilpotent.core.filtration import Filtration, analyze
+from nilpotent.core.orders import chain_order_homogeneous, low_order_terms
 from nilpotent.core.spans import to_double
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
@@ -352,39 +357,6 @@ def _fields_in(
 # --- orders ---------------------------------------------------------------------------
 
 
-def _low_terms(
-    jets: Sequence[Sequence[Poly]], weights: Sequence[int], zero: ZeroTest
-) -> dict[int, int]:
-    """For each coordinate j with a term of weighted degree < w_j − 1: that least degree."""
-    low: dict[int, int] = {}
-    for comps in jets:
-        for j, comp in enumerate(comps):
-            for mono, c in comp.terms.items():
-                d = weighted_degree(mono, weights)
-                if d < weights[j] - 1 and not zero(c):
-                    low[j] = min(low.get(j, d), d)
-    return low
-
-
-def _chain_order_homogeneous(hat: Sequence[Sequence[Poly]], j: int, w: int, zero: ZeroTest) -> bool:
-    """Whether some $\\hat X_{i_1}\\cdots\\hat X_{i_w} y_j$ is nonzero (a constant)."""
-    n = len(hat[0])
-    level: dict[frozenset, Poly] = {}
-    f = Poly.variable(n, j)
-    level[frozenset(f.terms.items())] = f
-    for _ in range(w):
-        nxt: dict[frozenset, Poly] = {}
-        for g in level.values():
-            for X in hat:
-                h = lie_derivative(X, g).drop_zeros(zero)
-                if h.terms:
-                    nxt.setdefault(frozenset(h.terms.items()), h)
-        level = nxt
-        if not level:
-            return False
-    return any(not zero(g.value_at_zero()) for g in level.values())
-
-
 def _chain_order(
     ctx: _Context,
     forward_poly: Sequence[Poly],
@@ -436,14 +408,14 @@ def _certified_orders(
     """
     w = ctx.weights
     jets = _fields_in(ctx, forward_poly, inverse_poly, w, list(w))
-    low = _low_terms(jets, w, ctx.zero)
+    low = low_order_terms(jets, w, ctx.zero)
     if quick and low:
         return None, jets
     hat = [[c.homogeneous_part(w, w[j] - 1) for j, c in enumerate(comps)] for comps in jets]
     reference = _reference_inverse(ctx) if low and use_reference else None
     orders: list[int | float] = []
     for j, wj in enumerate(w):
-        if not low and _chain_order_homogeneous(hat, j, wj, ctx.zero):
+        if not low and chain_order_homogeneous(hat, j, wj, ctx.zero):
             orders.append(wj)
             continue
         if reference is not None:
@@ -467,48 +439,6 @@ def _reference_inverse(ctx: _Context) -> tuple[Poly, ...] | None:
     return inverse
 
 
-# --- the exponential map -----------------------------------------------------------
-
-
-def _integrate(poly: Poly, k: int) -> Poly:
-    terms = {}
-    for m, c in poly.terms.items():
-        mm = list(m)
-        mm[k] += 1
-        terms[tuple(mm)] = c / se.Integer(mm[k])
-    return Poly(poly.nvars, terms)
-
-
-def _exponential_map(ctx: _Context, degree: int) -> list[Poly]:
-    r"""$E(s) = \exp(s_nY_n)\circ\cdots\circ\exp(s_1Y_1)(p)$ in $x$, to weighted degree ``degree``.
-
-    Each flow by Picard iteration $x \leftarrow E_{l-1} + \int_0^{s_l} Y_l(x)$ on
-    weighted jets (the integral raises the weighted degree by $w_l$, so a fixed
-    number of iterations is exact to ``degree``).
-    """
-    n, w = ctx.n, ctx.weights
-    key = ("exponential_map", degree)
-    cache = ctx.__dict__.setdefault("cache", {})
-    if key in cache:
-        return cache[key]
-    E = [Poly.constant(n, to_symengine(v)) for v in ctx.p]
-    for l, word in enumerate(ctx.filtration.frame):
-        wl = w[l]
-        if wl > degree:
-            continue
-        Y = word_field_symengine(ctx.sys, word)
-        base = E
-        cur = base
-        # The error of the k-th iterate has weighted order >= (k + 1) w_l (the integral
-        # adds w_l), so ceil((degree + 1) / w_l) - 1 iterations are exact to ``degree``.
-        for _ in range(-(-(degree + 1) // wl) - 1):
-            vals = weighted_jets(Y, ctx.xsyms, cur, w, degree - wl, ctx.numeric)
-            cur = [b + _integrate(v, l) for b, v in zip(base, vals, strict=True)]
-        E = cur
-    cache[key] = E
-    return E
-
-
 # --- the three constructions --------------------------------------------------------
 
 
@@ -525,7 +455,7 @@ def _algebraic(ctx: _Context) -> Built:
     n, w = ctx.n, ctx.weights
     if max(w) <= 2:
         return _linear(ctx)
-    E = _exponential_map(ctx, max(w) - 1)
+    E = exponential_map(ctx, max(w) - 1)
     zE = ctx.apply_A([e - Poly.constant(n, to_symengine(p)) for e, p in zip(E, ctx.p, strict=True)])
     forward: list[Poly] = []
     for j, wj in enumerate(w):
@@ -552,81 +482,12 @@ def _algebraic(ctx: _Context) -> Built:
     return tuple(forward), tuple(inverse), True, None, True, None
 
 
-def exponential_grading(weights: Sequence[int], chi: Sequence[Poly]) -> list[int]:
-    r"""Orders $\omega_k$ of the linear adapted $z_k$: the weighted orders of $z_k = \chi_k(y)$."""
-    return [min(weighted_degree(m, weights) for m in c.terms) for c in chi]
-
-
-def _first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
-    r"""$E_1(y) = \exp(\sum_j y_j Y_j)(p)$ in $x$, to weighted degree ``degree``.
-
-    The flow $x(\tau)$ of $Z = \sum_j y_j Y_j$ from $p$, by Picard iteration
-    $x \leftarrow p + \int_0^\tau Z(x)\,d\sigma$ on jets in $(y, \tau)$ ($\tau$ of
-    weight 0): every term of $Z$ carries some $y_j$ (weight $\ge 1$), so each
-    iteration is exact to one more degree; then $\tau = 1$.
-    """
-    n, w = ctx.n, ctx.weights
-    nv = n + 1
-    wt = [*w, 0]
-    point = [Poly.constant(nv, to_symengine(v)) for v in ctx.p]
-    frame = [word_field_symengine(ctx.sys, word) for word in ctx.filtration.frame]
-    flat = [c for f in frame for c in f]
-    ys = [Poly.variable(nv, j) for j in range(n)]
-    cur = point
-    for it in range(1, degree + 1):
-        # iterate ``it`` is exact to weighted degree ``it``: jets to ``it - 1`` suffice
-        top = min(degree, it)
-        jets = weighted_jets(flat, ctx.xsyms, cur, wt, top - 1, ctx.numeric)
-        new = []
-        for k in range(n):
-            acc = Poly(nv)
-            for j in range(n):
-                comp = jets[j * n + k]
-                if comp.terms:
-                    acc = acc + ys[j].mul(comp, wt, top)
-            new.append(point[k] + _integrate(acc, n))
-        cur = new
-    out = []
-    for poly in cur:
-        terms: dict = {}
-        for m, c in poly.terms.items():
-            key = (*m[:n],)
-            terms[key] = terms[key] + c if key in terms else c
-        out.append(Poly(n, terms))
-    return out
-
-
 def _exponential(ctx: _Context) -> Built:
-    return _from_exponential_map(ctx, _exponential_map(ctx, max(ctx.weights)))
+    return from_exponential_map(ctx, exponential_map(ctx, max(ctx.weights)))
 
 
 def _exponential_first_kind(ctx: _Context) -> Built:
-    return _from_exponential_map(ctx, _first_kind_map(ctx, max(ctx.weights)))
-
-
-def _from_exponential_map(ctx: _Context, E: Sequence[Poly]) -> Built:
-    """Coordinates defined by $x = E(y)$ (weighted degree <= r); forward: the series inverse."""
-    n, w = ctx.n, ctx.weights
-    r = max(w)
-    zE = ctx.apply_A([e - Poly.constant(n, to_symengine(p)) for e, p in zip(E, ctx.p, strict=True)])
-    # Truncation grading: z_k counts its order ω_k, the weighted order of χ_k(y) in the
-    # privileged y (computed); a dropped monomial z^β has order >= Σ β_k ω_k.  y_m is kept
-    # to ω-degree r + w_m: then the composites G(ψ(z)) used by the push-forward of the
-    # approximation are right to order r (a ∂/∂y_m costs at most w_m).
-    omega = exponential_grading(w, zE)
-    top = 2 * r
-    nonlinear = [zE[j] - Poly.variable(n, j) for j in range(n)]  # χ(y) − y
-    y = list(_identity(n))
-    # Fixed point y = z - N(y), N of omega-order >= 2: iterate k is right to omega-degree
-    # k + 1 at least (each substitution gains one degree), so it is truncated there.
-    for k in range(1, top + 1):
-        deg = min(top, k + 1)
-        y = [
-            (Poly.variable(n, j) - nonlinear[j].compose(y, omega, deg)).truncate(omega, deg)
-            for j in range(n)
-        ]
-    forward = tuple(y[j].truncate(omega, r + w[j]) for j in range(n))
-    return forward, tuple(zE), False, r, False, r
+    return from_exponential_map(ctx, first_kind_map(ctx, max(ctx.weights)))
 
 
 METHODS: dict[str, Callable[[_Context], Built]] = {
@@ -757,6 +618,13 @@ def privileged_coordinates(
             f"whether {sys.name!r} is bracket-generating at the point is undetermined: "
             f"{und.get('reason', '')}; no privileged coordinates (search longer brackets "
             "with max_length, CLI --max-length)"
+        )
+    if f.growth_vector_known_up_to is not None:
+        raise ComputationLimitError(
+            f"{sys.name!r} is bracket-generating at the point (proved through its orbit), but "
+            f"its growth vector there is known up to bracket length "
+            f"{f.growth_vector_known_up_to} only, and privileged coordinates need all the "
+            "weights (search longer brackets with max_length, CLI --max-length)"
         )
     if not f.bracket_generating:
         raise NotBracketGeneratingError(

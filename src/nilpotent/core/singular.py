@@ -53,6 +53,11 @@ __all__ = [
 SINGULAR_LOCUS_MAX_CHARS = 20_000
 """Largest frame column (characters of its components) whose determinant is expanded."""
 
+SINGULAR_DETERMINANT_MAX_CHARS = 200_000
+"""Budget on the expanded frame determinant before its trigonometric normal form
+(sympy's ``together``/``cancel`` on larger ones runs for minutes: ``car-trailers:4``'s
+is 5.2 million characters)."""
+
 MAX_FRAMES = 24
 """Most adapted frames whose determinants are computed (beyond: the locus is a superset)."""
 
@@ -231,7 +236,8 @@ def singular_set(sys: ControlSystem, generic: Sequence[int] | None = None) -> Si
         If the system is not bracket-generating at random points (no square frame).
     ComputationLimitError
         If a frame field is longer than :data:`SINGULAR_LOCUS_MAX_CHARS`
-        characters (the determinant would be unmanageable).
+        characters, or its expanded determinant longer than
+        :data:`SINGULAR_DETERMINANT_MAX_CHARS` (the simplification would be unmanageable).
 
     Examples
     --------
@@ -267,7 +273,17 @@ def singular_set(sys: ControlSystem, generic: Sequence[int] | None = None) -> Si
             )
         n = sys.n
         mat = se.DenseMatrix(n, n, [cols[k][j] for j in range(n) for k in range(n)])
-        det = trig_normal_form(to_sympy(sys, se.expand(mat.det())), coords)
+        expanded = se.expand(mat.det())
+        size = len(str(expanded))
+        if size > SINGULAR_DETERMINANT_MAX_CHARS:
+            raise ComputationLimitError(
+                f"the singular locus of {sys.name!r} is not simplified: the determinant of the "
+                f"frame {', '.join(format_word(w) for w in frame)} expands to {size:,} "
+                f"characters (limit SINGULAR_DETERMINANT_MAX_CHARS = "
+                f"{SINGULAR_DETERMINANT_MAX_CHARS:,} in nilpotent.core.singular); analyze "
+                "points instead (the regular/singular verdict at a point needs no determinant)"
+            )
+        det = trig_normal_form(to_sympy(sys, expanded), coords)
         dets.append((frame, det))
         if det.is_number and det != 0:
             return SingularLocus(tuple(dets), (), True)

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import operator
 from collections.abc import Iterable, Mapping, Sequence
+from typing import cast
 
 import symengine as se
 import sympy as sp
@@ -341,16 +342,27 @@ class Poly:
                 ]
             )
             return sp.S(total)
+        # unevaluated products and sum, built from their arguments directly (the public
+        # constructors sympify and inspect every argument: seconds on thousands of terms)
+        powers: dict[tuple[int, int], sp.Expr] = {}
         out = []
         for m, c in sorted(self.terms.items()):
-            f: list[sp.Expr] = [c._sympy_()]
-            for s, a in zip(symbols, m, strict=True):
+            f: list[sp.Expr] = [sp.S(c)]
+            for k, (s, a) in enumerate(zip(symbols, m, strict=True)):
                 if a:
-                    f.append(s**a)
-            out.append(sp.Mul(*f, evaluate=not keep_factors) if len(f) > 1 else f[0])
-        if keep_factors and len(out) > 1:
-            return sp.Add(*out, evaluate=False)
-        return sp.Add(*out)
+                    pw = powers.get((k, a))
+                    if pw is None:
+                        pw = powers[(k, a)] = s**a
+                    f.append(pw)
+            if len(f) == 1:
+                out.append(f[0])
+            elif f[0] == 1:
+                out.append(f[1] if len(f) == 2 else sp.Mul._from_args(f[1:]))
+            else:
+                out.append(sp.Mul._from_args(f))
+        if len(out) > 1:
+            return cast(sp.Expr, sp.Add._from_args(out))
+        return out[0] if out else sp.Integer(0)
 
 
 def lie_derivative(

@@ -52,16 +52,25 @@ class WordValues:
     expanded.  Exact rational values are used where the point and the fields
     allow it; exact values in symengine's numbers (``cos(pi/2)`` is ``0``) are
     computed the same way, only when a decision needs them (``symbolic``), and
-    abandoned when a value grows beyond a size budget.
+    abandoned when a value grows beyond a size budget.  With ``box`` (one arb
+    ball per coordinate), the balls enclose the values over the whole box
+    (interval arithmetic) and no exact value is computed.
     """
 
-    def __init__(self, sys: ControlSystem, point: Sequence[sp.Expr], symbolic: bool) -> None:
+    def __init__(
+        self,
+        sys: ControlSystem,
+        point: Sequence[sp.Expr],
+        symbolic: bool,
+        box: Sequence[flint.arb] | None = None,
+    ) -> None:
         self.sys = sys
         self.point = tuple(point)
         self.coords = se_coordinates(sys)
-        self.allow_symbolic = symbolic
+        self.allow_symbolic = symbolic and box is None
+        self.box = tuple(box) if box is not None else None
         q = [exact_value(v) for v in point]
-        self.rational_point = None if any(v is None for v in q) else q
+        self.rational_point = None if any(v is None for v in q) or box is not None else q
         self._exact: dict[Word, list | None] = {}
         self._balls: dict[tuple[Word, int], list] = {}
         self._sym: dict[Word, tuple | None] = {}
@@ -92,7 +101,8 @@ class WordValues:
         old = flint.ctx.prec
         flint.ctx.prec = prec
         try:
-            env = {x: ball(v, prec) for x, v in zip(self.coords, self.point, strict=True)}
+            values = self.box if self.box is not None else [ball(v, prec) for v in self.point]
+            env = dict(zip(self.coords, values, strict=True))
             try:
                 out = self._eval(word, env, exact=False, sub=lambda w: self.balls(w, prec))
             except Inaccurate:

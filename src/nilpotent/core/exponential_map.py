@@ -1,0 +1,138 @@
+r"""The exponential map of an adapted frame, on weighted jets.
+
+The two exponential constructions of privileged coordinates (A. Bellaïche, *The
+tangent space in sub-Riemannian geometry*, 1996, §5; F. Jean, *Control of
+Nonholonomic Systems*, 2014, §2.2.2) give $x$ as a function of the new coordinates:
+
+- 2nd kind: $E(s) = \exp(s_nY_n)\circ\cdots\circ\exp(s_1Y_1)(p)$
+  (:func:`exponential_map`);
+- 1st kind: $E_1(y) = \exp(\sum_j y_jY_j)(p)$ (:func:`first_kind_map`);
+
+each computed by Picard iteration on weighted jets truncated at the weighted degree
+needed, then inverted as a series (:func:`from_exponential_map`).  The builders of
+:mod:`nilpotent.core.privileged` call these; ``ctx`` is that module's context (the
+system, the point, the filtration, the weights and the linear adapted map ``A``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import symengine as se
+
+from nilpotent.core.brackets import word_field_symengine
+from nilpotent.core.taylor import Poly, to_symengine, weighted_degree, weighted_jets
+
+if TYPE_CHECKING:
+    from nilpotent.core.privileged import Built, _Context
+
+__all__ = ["exponential_grading", "exponential_map", "first_kind_map", "from_exponential_map"]
+
+
+def integrate(poly: Poly, k: int) -> Poly:
+    terms = {}
+    for m, c in poly.terms.items():
+        mm = list(m)
+        mm[k] += 1
+        terms[tuple(mm)] = c / se.Integer(mm[k])
+    return Poly(poly.nvars, terms)
+
+
+def exponential_map(ctx: _Context, degree: int) -> list[Poly]:
+    r"""$E(s) = \exp(s_nY_n)\circ\cdots\circ\exp(s_1Y_1)(p)$ in $x$, to weighted degree ``degree``.
+
+    Each flow by Picard iteration $x \leftarrow E_{l-1} + \int_0^{s_l} Y_l(x)$ on
+    weighted jets (the integral raises the weighted degree by $w_l$, so a fixed
+    number of iterations is exact to ``degree``).
+    """
+    n, w = ctx.n, ctx.weights
+    key = ("exponential_map", degree)
+    cache = ctx.__dict__.setdefault("cache", {})
+    if key in cache:
+        return cache[key]
+    E = [Poly.constant(n, to_symengine(v)) for v in ctx.p]
+    for l, word in enumerate(ctx.filtration.frame):
+        wl = w[l]
+        if wl > degree:
+            continue
+        Y = word_field_symengine(ctx.sys, word)
+        base = E
+        cur = base
+        # The error of the k-th iterate has weighted order >= (k + 1) w_l (the integral
+        # adds w_l), so ceil((degree + 1) / w_l) - 1 iterations are exact to ``degree``.
+        for _ in range(-(-(degree + 1) // wl) - 1):
+            vals = weighted_jets(Y, ctx.xsyms, cur, w, degree - wl, ctx.numeric)
+            cur = [b + integrate(v, l) for b, v in zip(base, vals, strict=True)]
+        E = cur
+    cache[key] = E
+    return E
+
+
+def exponential_grading(weights: Sequence[int], chi: Sequence[Poly]) -> list[int]:
+    r"""Orders $\omega_k$ of the linear adapted $z_k$: the weighted orders of $z_k = \chi_k(y)$."""
+    return [min(weighted_degree(m, weights) for m in c.terms) for c in chi]
+
+
+def first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
+    r"""$E_1(y) = \exp(\sum_j y_j Y_j)(p)$ in $x$, to weighted degree ``degree``.
+
+    The flow $x(\tau)$ of $Z = \sum_j y_j Y_j$ from $p$, by Picard iteration
+    $x \leftarrow p + \int_0^\tau Z(x)\,d\sigma$ on jets in $(y, \tau)$ ($\tau$ of
+    weight 0): every term of $Z$ carries some $y_j$ (weight $\ge 1$), so each
+    iteration is exact to one more degree; then $\tau = 1$.
+    """
+    n, w = ctx.n, ctx.weights
+    nv = n + 1
+    wt = [*w, 0]
+    point = [Poly.constant(nv, to_symengine(v)) for v in ctx.p]
+    frame = [word_field_symengine(ctx.sys, word) for word in ctx.filtration.frame]
+    flat = [c for f in frame for c in f]
+    ys = [Poly.variable(nv, j) for j in range(n)]
+    cur = point
+    for it in range(1, degree + 1):
+        # iterate ``it`` is exact to weighted degree ``it``: jets to ``it - 1`` suffice
+        top = min(degree, it)
+        jets = weighted_jets(flat, ctx.xsyms, cur, wt, top - 1, ctx.numeric)
+        new = []
+        for k in range(n):
+            acc = Poly(nv)
+            for j in range(n):
+                comp = jets[j * n + k]
+                if comp.terms:
+                    acc = acc + ys[j].mul(comp, wt, top)
+            new.append(point[k] + integrate(acc, n))
+        cur = new
+    out = []
+    for poly in cur:
+        terms: dict = {}
+        for m, c in poly.terms.items():
+            key = (*m[:n],)
+            terms[key] = terms[key] + c if key in terms else c
+        out.append(Poly(n, terms))
+    return out
+
+
+def from_exponential_map(ctx: _Context, E: Sequence[Poly]) -> Built:
+    """Coordinates defined by $x = E(y)$ (weighted degree <= r); forward: the series inverse."""
+    n, w = ctx.n, ctx.weights
+    r = max(w)
+    zE = ctx.apply_A([e - Poly.constant(n, to_symengine(p)) for e, p in zip(E, ctx.p, strict=True)])
+    # Truncation grading: z_k counts its order ω_k, the weighted order of χ_k(y) in the
+    # privileged y (computed); a dropped monomial z^β has order >= Σ β_k ω_k.  y_m is kept
+    # to ω-degree r + w_m: then the composites G(ψ(z)) used by the push-forward of the
+    # approximation are right to order r (a ∂/∂y_m costs at most w_m).
+    omega = exponential_grading(w, zE)
+    top = 2 * r
+    nonlinear = [zE[j] - Poly.variable(n, j) for j in range(n)]  # χ(y) − y
+    y = [Poly.variable(n, j) for j in range(n)]
+    # Fixed point y = z - N(y), N of omega-order >= 2: iterate k is right to omega-degree
+    # k + 1 at least (each substitution gains one degree), so it is truncated there.
+    for k in range(1, top + 1):
+        deg = min(top, k + 1)
+        y = [
+            (Poly.variable(n, j) - nonlinear[j].compose(y, omega, deg)).truncate(omega, deg)
+            for j in range(n)
+        ]
+    forward = tuple(y[j].truncate(omega, r + w[j]) for j in range(n))
+    return forward, tuple(zE), False, r, False, r
