@@ -30,9 +30,10 @@ import numpy as np
 from nilpotent.errors import OptionError
 from nilpotent.numeric.signals import InputSignal as InputSignal
 from nilpotent.numeric.signals import Segment as Segment
+from nilpotent.numeric.types import State
 
 
-def constant_segment(values: Sequence[float], duration: float = 1.0) -> Segment:
+def constant_segment(values: Sequence[float] | State, duration: float = 1.0) -> Segment:
     """A segment of constant inputs."""
     return Segment(duration, 2 * math.pi / duration, tuple(InputSignal(float(v)) for v in values))
 

@@ -44,6 +44,7 @@ import sympy as sp
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import NotBracketGeneratingError, PlanningError, SingularPointError
 from nilpotent.numeric.compile import CompiledSystem, compile_map, compile_system
+from nilpotent.numeric.types import State
 from nilpotent.planning.triangular import TriangularSystem
 
 #: Relative tolerance on singular values deciding numerical ranks.
@@ -81,7 +82,7 @@ class LocalModel:
 def _rank(mat: np.ndarray) -> int:
     from nilpotent.core.spans import numeric_rank  # the one rank engine (scale-invariant)
 
-    return numeric_rank(mat.T, RANK_TOL) if mat.size else 0
+    return numeric_rank(mat.T.tolist(), RANK_TOL) if mat.size else 0
 
 
 def _values(compiled: CompiledSystem, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -122,7 +123,9 @@ def generic_growth(compiled: CompiledSystem, p: np.ndarray, seed: int = 0) -> tu
     return best
 
 
-def check_regular(system: ControlSystem, point: Sequence[float], what: str) -> tuple[int, int]:
+def check_regular(
+    system: ControlSystem, point: Sequence[float] | State, what: str
+) -> tuple[int, int]:
     """Raise :class:`SingularPointError` if ``point`` is singular for the first two steps.
 
     Returns ``(n_1, n_2)`` at the point.
@@ -144,7 +147,7 @@ def _fmt(p: np.ndarray) -> str:
     return "(" + ", ".join(f"{v:.6g}" for v in p) + ")"
 
 
-def numeric_model(system: ControlSystem, point: Sequence[object]) -> LocalModel:
+def numeric_model(system: ControlSystem, point: Sequence[object] | State) -> LocalModel:
     """The step-2 nilpotent approximation at ``point`` in linear adapted coordinates (floats).
 
     Raises
@@ -215,7 +218,7 @@ def numeric_model(system: ControlSystem, point: Sequence[object]) -> LocalModel:
     return LocalModel(tuple(p), tri, forward, inverse, growth, "numeric")
 
 
-def exact_point(point: Sequence[object]) -> tuple[sp.Expr, ...]:
+def exact_point(point: Sequence[object] | State) -> tuple[sp.Expr, ...]:
     """The point as exact sympy numbers: exact values kept, floats by their shortest decimal."""
     out = []
     for v in point:
@@ -226,7 +229,7 @@ def exact_point(point: Sequence[object]) -> tuple[sp.Expr, ...]:
     return tuple(out)
 
 
-def symbolic_model(system: ControlSystem, point: Sequence[object]) -> LocalModel:
+def symbolic_model(system: ControlSystem, point: Sequence[object] | State) -> LocalModel:
     """The nilpotent approximation of :func:`nilpotent.core.approximation.approximate` at ``point``.
 
     The point is made exact (:func:`exact_point`) and the symbolic work is
@@ -254,7 +257,7 @@ def _symbolic_model(system: ControlSystem, point: tuple[sp.Expr, ...]) -> LocalM
         )
     names = tuple(approx.coordinates.names)
     tri = TriangularSystem.from_fields(approx.fields, names, tuple(filt.weights))
-    params = {sp.Symbol(k): v for k, v in system.parameters}
+    params: dict[str | sp.Symbol, sp.Expr] = {sp.Symbol(k): v for k, v in system.parameters}
     forward = compile_map(system.coordinates, approx.coordinates.forward, params,
                           name=f"{system.name}-forward")
     inverse = compile_map(names, approx.coordinates.inverse, params,
@@ -265,13 +268,13 @@ def _symbolic_model(system: ControlSystem, point: tuple[sp.Expr, ...]) -> LocalM
 
 
 #: Local-model builders by name.
-BUILDERS: dict[str, Callable[[ControlSystem, Sequence[object]], LocalModel]] = {
+BUILDERS: dict[str, Callable[[ControlSystem, Sequence[object] | State], LocalModel]] = {
     "numeric": numeric_model,
     "symbolic": symbolic_model,
 }
 
 
-def choose_builder(system: ControlSystem, point: Sequence[float]) -> str:
+def choose_builder(system: ControlSystem, point: Sequence[float] | State) -> str:
     """``"numeric"`` where the system has step ≤ 2 generically near ``point``.
 
     That is, fields and first brackets span the space at random points nearby

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TypedDict
 
 import numpy as np
 import shapely
@@ -29,7 +30,7 @@ from nilpotent.core.outline import Limits, Outline
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import OptionError
 
-__all__ = ["Robot", "singular_margin_function"]
+__all__ = ["OutlinePoints", "Robot", "singular_margin_function"]
 
 
 def singular_margin_function(system: ControlSystem) -> Callable[[np.ndarray], np.ndarray] | None:
@@ -53,6 +54,15 @@ def singular_margin_function(system: ControlSystem) -> Callable[[np.ndarray], np
 def _lambdify(system: ControlSystem, exprs: tuple[sp.Expr, ...]) -> Callable:
     subs = [(sp.Symbol(k), v) for k, v in system.parameters]
     return sp.lambdify([system.coordinates], [as_expr(e).subs(subs) for e in exprs], "numpy")
+
+
+class OutlinePoints(TypedDict):
+    """Raw outline coordinates of ``N`` configurations (:meth:`Robot.points`)."""
+
+    polygons: list[np.ndarray]  # one (N, k, 2) array per polygon
+    segments: np.ndarray  # (N, S, 2, 2)
+    discs: np.ndarray  # (N, D, 2) centres
+    radii: np.ndarray  # (N, D)
 
 
 @dataclass(frozen=True, eq=False)
@@ -147,7 +157,7 @@ class Robot:
             k += 3
         return np.stack(geoms, axis=1), np.stack(radii, axis=1)
 
-    def points(self, q: np.ndarray) -> dict[str, np.ndarray]:
+    def points(self, q: np.ndarray) -> OutlinePoints:
         """Raw outline coordinates: ``polygons`` list of ``(N, k, 2)``, ``segments``
         ``(N, S, 2, 2)``, ``discs`` ``(N, D, 2)`` and ``radii`` ``(N, D)`` (for drawing)."""
         q = np.atleast_2d(np.asarray(q, dtype=float))
@@ -158,7 +168,7 @@ class Robot:
         v = self._values(q)
         n = q.shape[0]
         k = 0
-        polys = []
+        polys: list[np.ndarray] = []
         for poly in outline.polygons:
             polys.append(v[:, k: k + 2 * len(poly)].reshape(n, len(poly), 2))
             k += 2 * len(poly)

@@ -19,6 +19,7 @@ from nilpotent.errors import IntegrationError
 from nilpotent.numeric.engines import choose_engine
 from nilpotent.numeric.integrate import Status, integrate
 from nilpotent.numeric.signals import Signal
+from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
 from nilpotent.simulation.trajectory import Trajectory, simulate, stationary
@@ -37,7 +38,7 @@ def single_engine(engine: str, system: ControlSystem) -> str:
 
 def simulate_candidates(
     system: ControlSystem,
-    x0: Sequence[float],
+    x0: Sequence[float] | State,
     candidates: Sequence[Sequence[Segment]],
     engine: str = "auto",
 ) -> np.ndarray:
@@ -65,7 +66,7 @@ def simulate_candidates(
 
 def simulate_path(
     system: ControlSystem,
-    x0: Sequence[float],
+    x0: Sequence[float] | State,
     segments: Sequence[Segment],
     points_per_segment: int = 40,
     engine: str = "auto",
@@ -83,7 +84,7 @@ def simulate_path(
 
 def simulate_plan(
     system: ControlSystem,
-    x0: Sequence[float],
+    x0: Sequence[float] | State,
     segments: Sequence[Segment],
     points_per_segment: int = 40,
     engine: str = "auto",

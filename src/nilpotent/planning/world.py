@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 import shapely
+from shapely.geometry.base import BaseGeometry
 
 from nilpotent.core.expressions import parse_expression, real_value
 from nilpotent.errors import ExpressionError, WorldError
@@ -74,7 +75,7 @@ class World:
     _radii: Any = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        shapes = [shapely.Polygon(p) for p in self.polygons]
+        shapes: list[BaseGeometry] = [shapely.Polygon(p) for p in self.polygons]
         for i, s in enumerate(shapes):
             if not s.is_valid:
                 raise WorldError(
@@ -124,7 +125,10 @@ class World:
         if self._blocked is not None:
             flat = reach <= 0
             out[flat] = shapely.intersects(self._blocked, geoms[flat])
-            out[~flat] = shapely.dwithin(geoms[~flat], self._blocked, reach[~flat])
+            # shapely's stubs take a scalar distance; dwithin is vectorised over it
+            out[~flat] = shapely.dwithin(  # pyright: ignore[reportCallIssue]
+                geoms[~flat], self._blocked, reach[~flat]  # pyright: ignore[reportArgumentType]
+            )
         if self._centres is not None:
             near = shapely.dwithin(geoms[..., None], self._centres, reach[..., None] + self._radii)
             out |= near.any(axis=-1)
@@ -132,7 +136,7 @@ class World:
 
     def point_clearance(self, xy: np.ndarray) -> np.ndarray:
         """:meth:`clearance` of points ``(..., 2)``."""
-        return self.clearance(shapely.points(np.asarray(xy, dtype=float)))
+        return self.clearance(np.asarray(shapely.points(np.asarray(xy, dtype=float))))
 
     def to_json(self) -> dict[str, Any]:
         """The world as a world-file structure (JSON-ready)."""

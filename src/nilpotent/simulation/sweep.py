@@ -171,7 +171,7 @@ def _as_value(value: Any, where: str) -> sp.Expr:
         from nilpotent.core.expressions import parse_expression
 
         expr = parse_expression(value, {}, where=where)
-    elif isinstance(value, sp.Basic):
+    elif isinstance(value, sp.Expr):
         expr = value
     elif isinstance(value, bool) or not isinstance(value, int | float):
         raise OptionError(f"{where}: {value!r} is not a number")

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.animation import FuncAnimation
+from matplotlib.artist import Artist
 from matplotlib.figure import Figure
 
 from nilpotent.errors import OptionError
@@ -47,7 +48,7 @@ class MotionAnimation:
     """A figure, a per-frame update and the matplotlib animation driving it."""
 
     figure: Figure
-    update: Callable[[int], tuple[object, ...]]
+    update: Callable[[int], tuple[Artist, ...]]
     frames: int
     animation: FuncAnimation
     title: str
@@ -134,9 +135,9 @@ def animate_motion_comparison(
     axes[0].set_ylabel("y / r")
     heading = fig.suptitle(title, fontsize=10)
 
-    def update(k: int) -> tuple[object, ...]:
+    def update(k: int) -> tuple[Artist, ...]:
         s = int(idx[k])
-        changed: list[object] = []
+        changed: list[Artist] = []
         for q, robot, lines in zip((qo, qa), robots, trails, strict=True):
             update_trident(robot, q[s], geom)
             wheels = geom.wheels(q[: s + 1])
@@ -273,11 +274,12 @@ def save_animation(
     if not out.is_dir():
         raise OptionError(f"cannot save the animation: {out} is not a folder")
     gif = out / f"{stem}.gif"
-    anim.animation.save(gif, writer=PillowWriter(fps=fps), dpi=dpi)
+    # matplotlib's stubs say int; the writers take any positive frame rate
+    anim.animation.save(gif, writer=PillowWriter(fps=fps), dpi=dpi)  # pyright: ignore[reportArgumentType]
     video: Path | None = None
     if mp4 and FFMpegWriter.isAvailable():
         video = out / f"{stem}.mp4"
-        anim.animation.save(video, writer=FFMpegWriter(fps=fps), dpi=dpi)
+        anim.animation.save(video, writer=FFMpegWriter(fps=fps), dpi=dpi)  # pyright: ignore[reportArgumentType]
     frames = [_frame_png(anim, k, dpi) for k in range(anim.frames)]
     page = out / f"{stem}.html"
     page.write_text(html_player(frames, title=anim.title, fps=fps), encoding="utf-8")

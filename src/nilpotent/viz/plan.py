@@ -23,6 +23,8 @@ from matplotlib.figure import Figure
 from nilpotent.planning.controls import input_at
 
 if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+
     from nilpotent.planning.iterative import Plan
 
 _TRIDENT_FORMS = ("trident-snake", "trident-snake-paper", "trident-snake-joints")
@@ -116,17 +118,18 @@ def animate_plan(plan: Plan, path: str | Path, *, frames: int = 60, fps: float =
 
         moving = draw_trident(ax, states[0], geometry, body_color="#0072B2", zorder=5)
 
-        def update(k: int):
+        def update(k: int) -> tuple[Artist, ...]:
             update_trident(moving, states[idx[k]], geometry)
             return ()
     else:
         (dot,) = ax.plot([states[0, 0]], [states[0, 1]], "o", color="#D55E00", zorder=5)
 
-        def update(k: int):
+        def update(k: int) -> tuple[Artist, ...]:
             dot.set_data([states[idx[k], 0]], [states[idx[k], 1]])
             return (dot,)
 
     anim = FuncAnimation(fig, update, frames=len(idx), interval=1000 / fps, blit=False)
     target = Path(path)
-    anim.save(target, writer=PillowWriter(fps=fps), dpi=dpi)
+    # matplotlib's stubs say int; PillowWriter takes any positive frame rate
+    anim.save(target, writer=PillowWriter(fps=fps), dpi=dpi)  # pyright: ignore[reportArgumentType]
     return target

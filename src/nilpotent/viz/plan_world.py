@@ -199,7 +199,12 @@ def animate_plan_world(
 
     if kind in (".gif", ".mp4"):
         anim = FuncAnimation(fig, update, frames=len(idx), blit=False)
-        writer = PillowWriter(fps=fps) if kind == ".gif" else FFMpegWriter(fps=fps)
+        # matplotlib's stubs say int; the writers take any positive frame rate
+        writer = (
+            PillowWriter(fps=fps)  # pyright: ignore[reportArgumentType]
+            if kind == ".gif"
+            else FFMpegWriter(fps=fps)  # pyright: ignore[reportArgumentType]
+        )
         anim.save(str(path), writer=writer, dpi=dpi)
     else:
         images = []

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 from matplotlib.patches import Polygon
@@ -39,7 +40,7 @@ class TridentArtists:
     wheels: tuple[Line2D, Line2D, Line2D]
     centre: Line2D
 
-    def all(self) -> tuple[object, ...]:
+    def all(self) -> tuple[Artist, ...]:
         return (self.body, *self.legs, *self.wheels, self.centre)
 
 

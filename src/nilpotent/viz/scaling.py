@@ -13,7 +13,7 @@ from collections.abc import Mapping
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.figure import Figure
+from matplotlib.figure import Figure, SubFigure
 
 from nilpotent.errors import OptionError
 
@@ -52,7 +52,7 @@ def plot_error_scaling(
     title: str | None = None,
     ax: Axes | None = None,
     figsize: tuple[float, float] = (6.4, 4.6),
-) -> tuple[Figure, Axes, dict[str, float]]:
+) -> tuple[Figure | SubFigure, Axes, dict[str, float]]:
     """Errors against amplitude on log–log axes, with fitted slopes.
 
     Parameters
@@ -71,7 +71,8 @@ def plot_error_scaling(
     Returns
     -------
     (Figure, Axes, dict)
-        The figure, the axes and the fitted slope per label.
+        The figure (the subfigure holding ``ax`` if it is in one), the axes and the
+        fitted slope per label.
     """
     from matplotlib.figure import Figure
 
@@ -80,7 +81,7 @@ def plot_error_scaling(
         fig = Figure(figsize=figsize, layout="constrained")
         ax = fig.subplots()
     else:
-        fig = ax.figure  # type: ignore[assignment]
+        fig = ax.figure
     slopes: dict[str, float] = {}
     markers = "osD^v<>"
     for k, (label, err) in enumerate(errors.items()):

@@ -122,6 +122,7 @@ class Computed:
                 run = simulate(
                     compiled, bracket_signal(sys.m, i, j, amp), samples=2, rtol=1e-12, atol=1e-14
                 )
+                assert run.final is not None  # two samples were asked for
                 rates.append(run.final / (math.pi * amp**2))
             cache[key] = tuple(float(v) for v in 2 * rates[1] - rates[0])
         return cache[key]
