@@ -41,6 +41,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import sympy as sp
+from sympy.core.sympify import _sympify as _strict_sympy
 
 __all__ = [
     "COPY_HANDLER",
@@ -77,7 +78,7 @@ COPY_HANDLER = (
 
 def expr_latex(value: sp.Basic | int | float) -> str:
     """LaTeX of one exact or floating-point expression (sympy's printer)."""
-    return sp.latex(sp.sympify(value))
+    return sp.latex(_strict_sympy(value))
 
 
 def field_latex(
@@ -94,7 +95,7 @@ def field_latex(
     """
     text = ""
     for a, x in zip(components, coordinates, strict=True):
-        a = sp.sympify(a)
+        a = _strict_sympy(a)
         if a.is_zero:
             continue
         negative = a.could_extract_minus_sign()

@@ -39,6 +39,7 @@ import warnings
 from collections.abc import Callable, Mapping, Sequence
 
 import sympy as sp
+from sympy.core.sympify import _sympify as _strict_sympy
 from sympy.printing.str import StrPrinter
 
 from nilpotent.core.linear_printer import print_linear
@@ -599,7 +600,7 @@ def as_expr(value: object) -> sp.Expr:
     """
     if isinstance(value, str):
         raise TypeError(f"as_expr does not read text ({value!r}): use parse_expression")
-    expr = sp.sympify(value)
+    expr = _strict_sympy(value)  # strict: never parses text
     if not isinstance(expr, sp.Expr):
         raise TypeError(f"{value!r} is not a scalar expression")
     return expr

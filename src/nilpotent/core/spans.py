@@ -38,6 +38,7 @@ zero, like every other statement about random points.
 
 from __future__ import annotations
 
+import abc
 import enum
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -102,7 +103,7 @@ class Decision(enum.Enum):
 Key = object
 
 
-class Vector:
+class Vector(abc.ABC):
     """A vector whose entries are computed on demand; sparse (a mapping key → value).
 
     Subclasses give :meth:`rational` (all entries as ``fmpq`` or ``None``),
@@ -110,11 +111,13 @@ class Vector:
     entries, or ``None`` when not available within a budget).
     """
 
+    @abc.abstractmethod
     def rational(self) -> dict[Key, fmpq] | None:
-        raise NotImplementedError
+        """All entries as exact rationals, or None when some entry is not rational."""
 
+    @abc.abstractmethod
     def balls(self, prec: int) -> dict[Key, arb]:
-        raise NotImplementedError
+        """All entries as arb balls at ``prec`` bits."""
 
     def symbolic(self) -> dict[Key, sp.Expr] | None:
         return None
