@@ -27,10 +27,11 @@ when ``atol = 0``), which bounds the local error by both ``atol`` (states below
 1) and ``rtol·‖x‖∞`` (larger states).  Taylor steps are never rejected.
 
 Failures: a trajectory is stopped when its state becomes non-finite
-(:attr:`Status.NON_FINITE`), when it ends a propagation with some
-``|x_k| > bound`` (:attr:`Status.BLOW_UP`; the reported state is the first one
-found beyond the bound, not the crossing point), or after ``max_steps`` steps
-(:attr:`Status.MAX_STEPS`).  The other lanes of its SIMD batch go on.  There is
+(:attr:`Status.NON_FINITE`), when it reaches one of its events (a segment end,
+a sample time) with some ``|x_k| > bound`` (:attr:`Status.BLOW_UP`; the
+reported state is the one at that event, not the crossing point), or after
+``max_steps`` of its own steps (:attr:`Status.MAX_STEPS`).  The other lanes of
+its SIMD batch go on, and none of this depends on them.  There is
 no minimum step size: near a finite-time blow-up Taylor steps shrink until the
 state overflows, which takes a few hundred steps.
 
@@ -612,13 +613,21 @@ def _run_chunk(
     """Integrate trajectories ``lo:hi`` (≤ one SIMD batch) through all their events.
 
     ``outcomes_of_interest``: heyoka's ``(time_limit, step_limit)`` outcomes.
+
+    A lane with no trajectory (the spare lanes of the last chunk, a stopped
+    trajectory) is a copy of a live lane (state, parameters, time, target):
+    it computes what that lane computes, so it never stops the SIMD batch on
+    its own (heyoka stops every lane when one has a non-finite state).  A
+    trajectory is judged only on its own: beyond ``bound`` at one of its own
+    events, ``max_steps`` by its own step count, non-finite when it is; so
+    neither its status nor its state depends on the other lanes.
     """
-    time_limit, step_limit = outcomes_of_interest
+    time_limit, _ = outcomes_of_interest
     bs = ta.batch_size
     width = hi - lo
     rows = np.arange(lo, hi)
-    # lanes → trajectories; spare lanes (last chunk) repeat the chunk's trajectories
-    pad = slice(lo, hi) if width == bs else lo + np.arange(bs) % width
+    # lanes → trajectories; spare lanes (last chunk) copy the chunk's first trajectory
+    pad = slice(lo, hi) if width == bs else np.r_[rows, np.full(bs - width, lo)]
     state = ta.state
     par = ta.pars
     state[:] = xs[pad].T
@@ -626,23 +635,30 @@ def _run_chunk(
     ta.set_time(np.zeros(bs))
     alive = np.ones(bs, dtype=bool)
     alive[width:] = False
-    par[:, width:] = 0.0  # spare lanes: zero inputs, nothing moves
     status = np.zeros(bs, dtype=np.int64)
     steps = np.zeros(bs, dtype=np.int64)
     all_lanes = np.arange(width)
     final_only = evt_time.shape[1] == 1
     offset = np.zeros(bs)  # global start time of each lane's current segment
     for e in range(evt_time.shape[1]):
+        if not alive.any():
+            break  # every trajectory of the chunk has stopped
         target = evt_time[pad, e]
         if segs > 1:
             target = target - offset  # local time in the current segment
         everyone = width == bs and bool(alive.all())
-        if not everyone:
-            target = np.where(alive, target, ta.time)
+        pending = alive.copy()  # the live lanes that have not reached their target
         while True:
-            # most steps any live lane has taken so far
-            fresh = (e == 0 and everyone) or not alive.any()
-            used = 0 if fresh else int(steps[alive].max())
+            if not everyone:  # the idle lanes copy the first live lane
+                idle = ~alive
+                donor = int(np.argmax(alive))
+                state[:, idle] = state[:, donor: donor + 1]
+                par[:, idle] = par[:, donor: donor + 1]
+                t_hi, t_lo = ta.dtime
+                ta.set_dtime(np.where(idle, t_hi[donor], t_hi), np.where(idle, t_lo[donor], t_lo))
+                target = np.where(idle, target[donor], target)
+            # most steps any lane still on its way has taken so far
+            used = 0 if e == 0 and everyone else int(steps[pending].max())
             ta.propagate_until(target, max_steps=max(max_steps - used, 1))
             outcomes, _, _, taken = zip(*ta.propagate_res, strict=True)
             steps += taken if everyone else np.array(taken) * alive
@@ -656,24 +672,21 @@ def _run_chunk(
             finite = np.all(np.isfinite(x), axis=1)
             big = np.any(np.abs(np.where(np.isfinite(x), x, 0.0)) > bound, axis=1)
             reached = np.array([o == time_limit for o in outcomes])
-            over = np.array([o == step_limit for o in outcomes]) | (steps >= max_steps)
-            dead = alive & (~finite | big | (over & ~reached))
+            # a lane is judged at its own events and by its own steps: a lane that another
+            # one stopped early (an error, the batch's step limit) goes on where it is
+            dead = alive & (~finite | (big & reached) | ((steps >= max_steps) & ~reached))
             if dead.any():
                 status[dead] = np.where(~finite[dead], _NON_FINITE,
                                         np.where(big[dead], _BLOW_UP, _MAX_STEPS))
                 idx = np.flatnonzero(dead[:width])
                 final[lo + idx] = x[idx]
                 alive &= ~dead
-                # park the stopped lanes: zero state and inputs, target = their time
-                state[:, dead] = 0.0
-                par[:, dead] = 0.0
-                if not np.isfinite(ta.time).all():  # a lane that blew up: restart its clock
-                    ta.set_time(np.where(np.isfinite(ta.time), ta.time, 0.0))
-                target = np.where(alive, target, ta.time)
                 everyone = False
-            if np.all(reached | ~alive):
+            pending &= alive & ~reached
+            if not pending.any():
                 break
-            # a lane stopped the whole SIMD batch: the others go on from where they are
+        if not alive.any():
+            break
         if final_only and everyone:  # one segment, no samples: the common case
             final[lo:hi] = state[:, :width].T
             continue
@@ -686,7 +699,8 @@ def _run_chunk(
             offset[lanes] = evt_time[lo + lanes, e]
             restart = np.zeros(bs, dtype=bool)
             restart[lanes] = True
-            ta.set_time(np.where(restart, 0.0, ta.time))
+            t_hi, t_lo = ta.dtime  # the other lanes keep their time exactly
+            ta.set_dtime(np.where(restart, 0.0, t_hi), np.where(restart, 0.0, t_lo))
         end = kind == segs - 1
         if end.any():
             final[lo + live[end]] = state[:, live[end]].T

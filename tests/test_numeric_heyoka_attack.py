@@ -1,0 +1,156 @@
+"""Attacks on the heyoka engine: singular fields, non-finite starts, batch-mates that fail.
+
+Each test asserts a promise of :mod:`nilpotent.numeric.engines.heyoka_engine`
+against a closed-form solution, a second engine, or the same trajectory
+integrated alone (a trajectory's result does not depend on its batch, bit for
+bit).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from nilpotent.models import get_model
+from nilpotent.numeric import Signal, Status, bracket_inputs, compile_fields, compile_system
+from nilpotent.numeric import integrate as _integrate
+
+pytest.importorskip("heyoka")
+
+
+def integrate(*args, **kwargs):
+    kwargs.setdefault("engine", "heyoka")
+    return _integrate(*args, **kwargs)
+
+
+def _sinusoid(constant, omega, cos, duration=1.0):
+    """One segment per row, one input per row entry: ``u_i = a_i + b_i cos(ω τ)``."""
+    constant = np.atleast_2d(np.asarray(constant, dtype=float))  # (B, m)
+    b, m = constant.shape
+    cos = np.broadcast_to(np.asarray(cos, dtype=float), (b, m))
+    omega = np.broadcast_to(np.asarray(omega, dtype=float).reshape(-1, 1), (b, 1))
+    return Signal(np.full((b, 1), duration), np.array(omega), constant[:, None, :],
+                  cos[:, None, :, None], np.zeros((b, 1, m, 1)))
+
+
+def _same(a, b):
+    return np.array_equal(a, b, equal_nan=True)
+
+
+def _assert_alone_equals(sol, system, x0, sig, rows, **kwargs):
+    """Rows of ``sol`` equal, bit for bit, those rows integrated alone."""
+    for r in rows:
+        one = integrate(system, x0[r:r + 1], sig[r:r + 1], **kwargs)
+        assert one.status[0] == sol.status[r], r
+        assert one.steps[0] == sol.steps[r], r
+        assert _same(one.final[0], sol.final[r]), r
+        assert _same(one.samples[0], sol.samples[r]), r
+
+
+@pytest.fixture(scope="module")
+def snake():
+    return compile_system(get_model("trident-snake"))
+
+
+def test_a_field_singular_where_a_held_coordinate_is_zero_in_a_batch_of_one():
+    # x' = u1 cos(x)/y, y' = u2 with u2 = 0: y is held (a parameter) at 1 and
+    # x' = cos x, x(t) = gd(t) = 2 atan(tanh(t/2)).  The spare SIMD lanes of the batch of one
+    # used to get y = 0 (0·cos(x)/0 = NaN), which stopped heyoka's whole SIMD batch and
+    # raised "one of the current times is not finite"
+    x, y = sp.symbols("x y")
+    cs = compile_fields([x, y], [[sp.cos(x) / y, 0], [0, 1]], name="attack-held-singular")
+    sig = Signal(np.full((1, 1), 3.0), np.ones((1, 1)), np.array([[[1.0, 0.0]]]),
+                 np.zeros((1, 1, 2, 0)), np.zeros((1, 1, 2, 0)))
+    sol = integrate(cs, [[0.0, 1.0]], sig, rtol=1e-12, atol=1e-14, times=[0.0, 1.5, 3.0])
+    assert sol.all_ok
+    assert sol.final[0, 1] == 1.0
+    assert sol.final[0, 0] == pytest.approx(2 * math.atan(math.tanh(1.5)), abs=1e-11)
+    assert sol.samples[0, 1, 0] == pytest.approx(2 * math.atan(math.tanh(0.75)), abs=1e-11)
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("column", [0, 2])
+def test_a_non_finite_start_in_a_partial_simd_batch_is_reported_not_raised(snake, value, column):
+    # column 2 (θ) is held under [X1, X2] motions when finite; a non-finite start is
+    # integrated in full and fails; the spare lanes of the partial SIMD batch copied it
+    # and heyoka raised instead of reporting NON_FINITE
+    rng = np.random.default_rng(11)
+    x0 = rng.uniform(-0.1, 0.1, (3, 6))
+    x0[1, column] = value
+    sig = bracket_inputs(3, 1, 2, np.array([0.1, 0.2, 0.15]))
+    sol = integrate(snake, x0, sig, times=[0.0, 1.0])
+    assert Status(int(sol.status[1])) == Status.NON_FINITE
+    assert np.all(sol.status[[0, 2]] == Status.SUCCESS)
+    assert np.all(np.isnan(sol.samples[1, 1]))
+    ref = _integrate(snake, x0[[0, 2]], sig[np.array([0, 2])], engine="scipy", rtol=1e-12,
+                     atol=1e-14)
+    assert np.abs(sol.final[[0, 2]] - ref.final).max() < 1e-9
+    _assert_alone_equals(sol, snake, x0, sig, [0, 2], times=[0.0, 1.0])
+
+
+def test_a_lane_stopped_at_a_singular_point_does_not_stop_the_others():
+    # x' = u/x with u = -1 + cos(ωτ)/2: x² = x0² - 2t + sin(ωt)/ω.  x0 = 1 reaches 0 (non-finite)
+    # before t = 1 while the others (many steps: ω large) are still on their way; the
+    # stopped lane used to be parked at x = 0, where 0·(1/0) is NaN: heyoka then refused to go on
+    x = sp.Symbol("x")
+    cs = compile_fields([x], [[1 / x]], name="attack-inverse")
+    omega = np.array([1.0, 2000.0, 2000.0])
+    x0 = np.array([[1.0], [2.0], [3.0]])
+    sig = _sinusoid(np.full((3, 1), -1.0), omega, 0.5)
+    sol = integrate(cs, x0, sig, rtol=1e-12, atol=1e-14)
+    assert Status(int(sol.status[0])) in (Status.NON_FINITE, Status.BLOW_UP)
+    assert np.all(sol.status[1:] == Status.SUCCESS)
+    exact = np.sqrt(x0[1:, 0] ** 2 - 2 + np.sin(omega[1:]) / omega[1:])
+    np.testing.assert_allclose(sol.final[1:, 0], exact, rtol=1e-10)
+    _assert_alone_equals(sol, cs, x0, sig, [1, 2], rtol=1e-12, atol=1e-14)
+
+
+def test_spare_lanes_copy_a_trajectory_whose_field_overflows():
+    # x' = 1/x from x0 = 1e-300: the Taylor coefficients overflow at once (NON_FINITE); the
+    # spare lanes of the batch of two copied it and stopped the good row's lane for ever
+    x = sp.Symbol("x")
+    cs = compile_fields([x], [[1 / x]], name="attack-inverse")
+    x0 = np.array([[1e-300], [1.0]])
+    sig = _sinusoid(np.full((2, 1), 0.5), 1.0, 0.0)
+    sol = integrate(cs, x0, sig, rtol=1e-12, atol=1e-14)
+    assert sol.status[0] != Status.SUCCESS and sol.status[1] == Status.SUCCESS
+    assert sol.final[1, 0] == pytest.approx(math.sqrt(2.0), rel=1e-11)  # x² = 1 + t
+
+
+def test_max_steps_is_counted_per_trajectory_not_per_simd_batch():
+    # x' = cos(ωτ): x(t) = sin(ωt)/ω.  Row 0 (ω = 300) needs far more steps than row 1 (ω = 1);
+    # with max_steps just below row 0's count, row 0 fails and row 1 succeeds, as alone.
+    # Row 1 used to be stopped (MAX_STEPS) by the SIMD batch's step limit spent by row 0
+    x = sp.Symbol("x")
+    cs = compile_fields([x], [[sp.Integer(1)]], name="attack-clock")
+    sig = _sinusoid(np.zeros((2, 1)), np.array([300.0, 1.0]), 1.0)
+    x0 = np.zeros((2, 1))
+    ts = [0.5, 0.75]
+    free = integrate(cs, x0, sig, times=ts)
+    assert free.all_ok and free.steps[0] > 10 * free.steps[1]
+    sol = integrate(cs, x0, sig, times=ts, max_steps=int(free.steps[0]) - 1)
+    assert Status(int(sol.status[0])) == Status.MAX_STEPS
+    assert Status(int(sol.status[1])) == Status.SUCCESS
+    assert sol.final[1, 0] == pytest.approx(math.sin(1.0), abs=1e-12)
+    np.testing.assert_allclose(sol.samples[1, :, 0], np.sin(ts), atol=1e-12)
+    _assert_alone_equals(sol, cs, x0, sig, [0, 1], times=ts, max_steps=int(free.steps[0]) - 1)
+
+
+def test_blow_up_state_does_not_depend_on_a_failing_batch_mate():
+    # x' = u x², x(t) = 1/(1 - ∫u).  Row 0 (u ≈ 0.9) passes bound = 3 at t ≈ 0.74 and ends at
+    # x ≈ 10 (BLOW_UP, reported at its end); row 1 (u ≈ 1.2) overflows near t = 0.83 while
+    # row 0 is still on its way (both need many steps: ω = 5000).  Row 0 used to be judged
+    # when row 1 stopped the SIMD batch: BLOW_UP at x ≈ 7.2, other steps than alone
+    x = sp.Symbol("x")
+    cs = compile_fields([x], [[x**2]], name="attack-riccati")
+    sig = _sinusoid(np.array([[0.9], [1.2]]), 5000.0, 0.01)
+    x0 = np.ones((2, 1))
+    sol = integrate(cs, x0, sig, bound=3.0)
+    assert Status(int(sol.status[0])) == Status.BLOW_UP
+    assert Status(int(sol.status[1])) in (Status.NON_FINITE, Status.BLOW_UP)
+    exact = 1 / (1 - 0.9 - 0.01 * math.sin(5000.0) / 5000.0)
+    assert sol.final[0, 0] == pytest.approx(exact, rel=1e-8)
+    _assert_alone_equals(sol, cs, x0, sig, [0], bound=3.0)
