@@ -13,6 +13,8 @@ import math
 import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from nilpotent.models import get_model
 from nilpotent.numeric import Signal, Status, bracket_inputs, compile_fields, compile_system
@@ -154,3 +156,99 @@ def test_blow_up_state_does_not_depend_on_a_failing_batch_mate():
     exact = 1 / (1 - 0.9 - 0.01 * math.sin(5000.0) / 5000.0)
     assert sol.final[0, 0] == pytest.approx(exact, rel=1e-8)
     _assert_alone_equals(sol, cs, x0, sig, [0], bound=3.0)
+
+
+# --- properties: a trajectory's result does not depend on its batch or on the threads ---
+
+_MASKS = ((1, 1, 0), (1, 0, 1), (0, 1, 1), (1, 1, 1), (0, 0, 0))  # inputs in use per row
+_SPECIAL = (np.nan, np.inf, -np.inf, 5e8, -2e9)  # start values that fail (bound 1e8)
+
+
+@st.composite
+def _batches(draw):
+    """A trident snake batch: rows with different inputs in use (some hold θ), several
+    segments with per-row durations, K = 0 or 1, start values with NaN/inf/huge entries."""
+    b = draw(st.integers(1, 11))
+    segs = draw(st.integers(1, 3))
+    k = draw(st.sampled_from((0, 1)))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    masks = np.array([_MASKS[i] for i in draw(
+        st.lists(st.integers(0, len(_MASKS) - 1), min_size=b, max_size=b))], dtype=float)
+    durations = rng.uniform(0.3, 1.2, (b, segs))
+    if draw(st.booleans()):
+        durations[:] = durations[0]
+    scale = masks[:, None, :]
+    if k == 0:
+        sig = Signal(durations, rng.uniform(0.5, 3.0, (b, segs)),
+                     rng.normal(0, 0.7, (b, segs, 3)) * scale,
+                     np.zeros((b, segs, 3, 0)), np.zeros((b, segs, 3, 0)))
+    else:
+        sig = Signal(durations, rng.uniform(0.5, 3.0, (b, segs)), np.zeros((b, segs, 3)),
+                     rng.normal(0, 0.7, (b, segs, 3, 1)) * scale[..., None],
+                     rng.normal(0, 0.7, (b, segs, 3, 1)) * scale[..., None])
+    x0 = rng.uniform(-1.0, 1.0, (b, 6))
+    for _ in range(draw(st.integers(0, 2))):
+        x0[draw(st.integers(0, b - 1)), draw(st.sampled_from((0, 2, 4)))] = draw(
+            st.sampled_from(_SPECIAL))
+    total = float(sig.total_durations.min())
+    ts = np.sort(rng.uniform(0.0, total, draw(st.integers(0, 3))))
+    if draw(st.booleans()):
+        ts = np.concatenate([[0.0], ts, [total]])
+    return x0, sig, ts
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(case=_batches(), threads=st.sampled_from((1, 2, 3, 7)),
+       max_steps=st.sampled_from((100_000, 40, 15)))
+def test_each_row_is_bit_identical_alone_permuted_and_on_any_thread_count(
+        snake, case, threads, max_steps):
+    x0, sig, ts = case
+    kw = dict(times=ts, max_steps=max_steps)
+    sol = integrate(snake, x0, sig, threads=threads, **kw)
+    perm = np.random.default_rng(0).permutation(x0.shape[0])
+    back = np.argsort(perm)
+    mixed = integrate(snake, x0[perm], sig[perm], threads=1, **kw)
+    np.testing.assert_array_equal(mixed.status[back], sol.status)
+    np.testing.assert_array_equal(mixed.steps[back], sol.steps)
+    assert _same(mixed.final[back], sol.final) and _same(mixed.samples[back], sol.samples)
+    _assert_alone_equals(sol, snake, x0, sig, range(x0.shape[0]), threads=threads, **kw)
+    # held coordinates are reported as their start values; NaN past a stop everywhere
+    bad = ~np.all(np.abs(x0) <= 1e8, axis=1)
+    assert np.all(sol.status[bad] != Status.SUCCESS)
+    stopped = sol.status != Status.SUCCESS
+    assert np.all(np.isnan(sol.samples[stopped]).all(axis=2) | ~np.isnan(sol.samples[stopped])
+                  .any(axis=2))
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(case=_batches())
+def test_finite_rows_agree_with_solve_ivp(snake, case):
+    x0, sig, ts = case
+    ok = np.all(np.abs(x0) <= 1.0, axis=1)
+    if not ok.any():
+        return
+    x0, sig = x0[ok], sig[np.flatnonzero(ok)]
+    hy = integrate(snake, x0, sig, times=ts, rtol=1e-12, atol=1e-14)
+    ref = _integrate(snake, x0, sig, engine="scipy", times=ts, rtol=1e-13, atol=1e-15)
+    assert hy.all_ok and ref.all_ok
+    assert np.abs(hy.final - ref.final).max() < 1e-9
+    if ts.size:
+        assert np.abs(hy.samples - ref.samples).max() < 1e-9
+
+
+@pytest.mark.parametrize("max_steps", range(1, 13))
+def test_a_lane_that_reaches_its_event_on_the_last_allowed_step_is_not_stopped(max_steps):
+    # x' = cos(ωτ) with a sample at 0.5: row 0 (ω = 1) needs a few steps per event, row 1
+    # (ω = 300) many.  When the SIMD batch's step limit (spent by row 1) falls on the step
+    # where row 0 reaches its event, heyoka reports step_limit for row 0 too; row 0 used to
+    # be stopped there (MAX_STEPS) although alone it goes on.  Every max_steps: as alone
+    x = sp.Symbol("x")
+    cs = compile_fields([x], [[sp.Integer(1)]], name="attack-clock")
+    sig = _sinusoid(np.zeros((2, 1)), np.array([1.0, 300.0]), 1.0)
+    x0 = np.zeros((2, 1))
+    sol = integrate(cs, x0, sig, times=[0.5], max_steps=max_steps)
+    assert Status(int(sol.status[1])) == Status.MAX_STEPS
+    _assert_alone_equals(sol, cs, x0, sig, [0], times=[0.5], max_steps=max_steps)
+    if sol.status[0] == Status.SUCCESS:
+        assert sol.final[0, 0] == pytest.approx(math.sin(1.0), abs=1e-12)

@@ -671,7 +671,9 @@ def _run_chunk(
             x = state.T
             finite = np.all(np.isfinite(x), axis=1)
             big = np.any(np.abs(np.where(np.isfinite(x), x, 0.0)) > bound, axis=1)
-            reached = np.array([o == time_limit for o in outcomes])
+            # heyoka reports step_limit for a lane that reached its target on the batch's
+            # last allowed step: its time tells
+            reached = np.array([o == time_limit for o in outcomes]) | (ta.time == target)
             # a lane is judged at its own events and by its own steps: a lane that another
             # one stopped early (an error, the batch's step limit) goes on where it is
             dead = alive & (~finite | (big & reached) | ((steps >= max_steps) & ~reached))
