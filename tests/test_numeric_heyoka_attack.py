@@ -252,3 +252,20 @@ def test_a_lane_that_reaches_its_event_on_the_last_allowed_step_is_not_stopped(m
     _assert_alone_equals(sol, cs, x0, sig, [0], times=[0.5], max_steps=max_steps)
     if sol.status[0] == Status.SUCCESS:
         assert sol.final[0, 0] == pytest.approx(math.sin(1.0), abs=1e-12)
+
+
+def test_a_lane_stopped_on_the_step_where_another_switches_segment():
+    # x' = u x, u = 1: x = x0 e^t.  Row 0 starts at NaN (stopped on the first step, its time
+    # NaN); row 1 reaches the end of its short first segment on that same step and switches
+    # to its second segment: resetting the lanes' times used to choke on the stopped lane's
+    x = sp.Symbol("x")
+    cs = compile_fields([x], [[x]], name="attack-linear")
+    sig = Signal(np.array([[1e-3, 1.0], [1e-3, 1.0]]), np.ones((2, 2)), np.ones((2, 2, 1)),
+                 np.zeros((2, 2, 1, 0)), np.zeros((2, 2, 1, 0)))
+    x0 = np.array([[np.nan], [1.0]])
+    sol = integrate(cs, x0, sig, rtol=1e-12, atol=1e-14, times=[0.5])
+    assert Status(int(sol.status[0])) == Status.NON_FINITE
+    assert Status(int(sol.status[1])) == Status.SUCCESS
+    assert sol.final[1, 0] == pytest.approx(math.exp(1.001), rel=1e-11)
+    assert sol.samples[1, 0, 0] == pytest.approx(math.exp(0.5), rel=1e-11)
+    _assert_alone_equals(sol, cs, x0, sig, [1], rtol=1e-12, atol=1e-14, times=[0.5])

@@ -699,7 +699,7 @@ def _run_chunk(
             lanes = live[switch]
             par[:, lanes] = pars[lo + lanes, kind[switch] + 1].T
             offset[lanes] = evt_time[lo + lanes, e]
-            restart = np.zeros(bs, dtype=bool)
+            restart = ~alive  # idle lanes (a stopped one's time may be NaN): synced later
             restart[lanes] = True
             t_hi, t_lo = ta.dtime  # the other lanes keep their time exactly
             ta.set_dtime(np.where(restart, 0.0, t_hi), np.where(restart, 0.0, t_lo))
