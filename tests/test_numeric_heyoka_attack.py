@@ -269,3 +269,26 @@ def test_a_lane_stopped_on_the_step_where_another_switches_segment():
     assert sol.final[1, 0] == pytest.approx(math.exp(1.001), rel=1e-11)
     assert sol.samples[1, 0, 0] == pytest.approx(math.exp(0.5), rel=1e-11)
     _assert_alone_equals(sol, cs, x0, sig, [1], rtol=1e-12, atol=1e-14, times=[0.5])
+
+
+def test_a_batch_mate_that_fails_early_does_not_change_the_rounding_of_the_others():
+    # car with 3 trailers, two segments, one sample (a case found by fuzzing): row 0 starts at
+    # NaN and stops heyoka's SIMD batch on its first step, while row 1 is on its way.  A lane
+    # restarted mid-way is not bit-identical (heyoka's compensated sums start afresh): row 1
+    # runs again from its event, so its result is that of row 1 alone, bit for bit
+    cs = compile_system(get_model("car-trailers:3"))
+    x0 = np.array([[0.88874924243701892, 0.11516956254556887, np.nan, 0.70339137057761003,
+                    0.60400509226418331, 2e8],
+                   [0.16954946103343294, 0.84594594120185640, -0.84413504432806974,
+                    -0.70955379875492519, -0.86191594156282281, -0.48589300453514395]])
+    sig = Signal(np.array([[0.9938550141792146, 0.9846212196186666],
+                           [0.36111697365462203, 0.34485492167350423]]), np.ones((2, 2)),
+                 np.array([[[0.4643927400845625, 0.8049064106704379],
+                            [0.7061863784484994, -0.6240804522201474]],
+                           [[-0.6670222476464329, 1.8617551804263492],
+                            [0.04770161022755551, 0.15898070591802993]]]),
+                 np.zeros((2, 2, 2, 0)), np.zeros((2, 2, 2, 0)))
+    ts = [0.47160614719774424]
+    sol = integrate(cs, x0, sig, times=ts)
+    assert Status(int(sol.status[0])) == Status.NON_FINITE and sol.status[1] == Status.SUCCESS
+    _assert_alone_equals(sol, cs, x0, sig, [1], times=ts)

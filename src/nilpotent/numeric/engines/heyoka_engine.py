@@ -648,6 +648,8 @@ def _run_chunk(
             target = target - offset  # local time in the current segment
         everyone = width == bs and bool(alive.all())
         pending = alive.copy()  # the live lanes that have not reached their target
+        held = np.zeros(bs, dtype=bool)  # at their target, set aside until the event
+        held_x, held_t = np.empty_like(state), [np.zeros(bs), np.zeros(bs)]
         while True:
             if not everyone:  # the idle lanes copy the first live lane
                 idle = ~alive
@@ -657,26 +659,41 @@ def _run_chunk(
                 t_hi, t_lo = ta.dtime
                 ta.set_dtime(np.where(idle, t_hi[donor], t_hi), np.where(idle, t_lo[donor], t_lo))
                 target = np.where(idle, target[donor], target)
+            # where each lane starts this call: a lane that another one stops on its way (an
+            # error, the batch's step limit) goes back there and runs again, uninterrupted (a
+            # restart is not bit-identical: heyoka's compensated sums start afresh); a lane
+            # that reached its target in an earlier call goes back there too (heyoka would
+            # step it again: its double-length time may miss the target by an ulp)
+            start_x, start_t = state.copy(), [t.copy() for t in ta.dtime]
+            done = alive & ~pending
             # most steps any lane still on its way has taken so far
             used = 0 if e == 0 and everyone else int(steps[pending].max())
             ta.propagate_until(target, max_steps=max(max_steps - used, 1))
             outcomes, _, _, taken = zip(*ta.propagate_res, strict=True)
-            steps += taken if everyone else np.array(taken) * alive
             if (
                 outcomes.count(time_limit) == bs
                 and used + max(taken) < max_steps
+                and not done.any()
                 and np.abs(state).max() <= bound  # False for NaN
             ):
+                steps += taken if everyone else np.array(taken) * pending
                 break  # the common case: every lane reached its target
+            taken = np.array(taken)
             x = state.T
-            finite = np.all(np.isfinite(x), axis=1)
+            t_hi, t_lo = (t.copy() for t in ta.dtime)
+            finite = np.all(np.isfinite(x), axis=1) & np.isfinite(t_hi) & np.isfinite(t_lo)
             big = np.any(np.abs(np.where(np.isfinite(x), x, 0.0)) > bound, axis=1)
-            # heyoka reports step_limit for a lane that reached its target on the batch's
-            # last allowed step: its time tells
-            reached = np.array([o == time_limit for o in outcomes]) | (ta.time == target)
-            # a lane is judged at its own events and by its own steps: a lane that another
-            # one stopped early (an error, the batch's step limit) goes on where it is
-            dead = alive & (~finite | (big & reached) | ((steps >= max_steps) & ~reached))
+            # heyoka reports step_limit (not time_limit) for a lane that took its last step to
+            # the target when the batch's step limit or another lane's error ended the call
+            with np.errstate(invalid="ignore"):
+                arrived = np.abs((target - t_hi) - t_lo) <= 4 * np.spacing(np.abs(target))
+            reached = np.array([o == time_limit for o in outcomes]) | arrived
+            # a lane is judged on its own: non-finite, beyond the bound at its event, or out of
+            # its own steps; so neither its status nor its state depends on the other lanes
+            dead = pending & (~finite | (big & reached)
+                              | ((steps + taken >= max_steps) & ~reached))
+            stopped = pending & ~reached & ~dead  # by another lane: runs again
+            steps += taken * (pending & ~stopped)
             if dead.any():
                 status[dead] = np.where(~finite[dead], _NON_FINITE,
                                         np.where(big[dead], _BLOW_UP, _MAX_STEPS))
@@ -684,9 +701,31 @@ def _run_chunk(
                 final[lo + idx] = x[idx]
                 alive &= ~dead
                 everyone = False
+            # a lane at its target whose (unwanted) next step is not finite would stop every
+            # call: it waits aside, as an idle lane, until the others reach their targets
+            sick = done & ~finite
+            if sick.any():
+                held_x[:, sick] = start_x[:, sick]
+                held_t[0][sick], held_t[1][sick] = start_t[0][sick], start_t[1][sick]
+                held |= sick
+                alive &= ~sick
+                everyone = False
+            back = (done & ~sick) | stopped
+            if back.any():
+                state[:, back] = start_x[:, back]
+                ok = np.isfinite(t_hi) & np.isfinite(t_lo)  # the others: dead or idle
+                ta.set_dtime(np.where(back, start_t[0], np.where(ok, t_hi, 0.0)),
+                             np.where(back, start_t[1], np.where(ok, t_lo, 0.0)))
             pending &= alive & ~reached
             if not pending.any():
                 break
+        if held.any():
+            alive |= held
+            state[:, held] = held_x[:, held]
+            t_hi, t_lo = ta.dtime
+            ok = np.isfinite(t_hi) & np.isfinite(t_lo)
+            ta.set_dtime(np.where(held, held_t[0], np.where(ok, t_hi, 0.0)),
+                         np.where(held, held_t[1], np.where(ok, t_lo, 0.0)))
         if not alive.any():
             break
         if final_only and everyone:  # one segment, no samples: the common case
