@@ -640,16 +640,17 @@ def _run_chunk(
     all_lanes = np.arange(width)
     final_only = evt_time.shape[1] == 1
     offset = np.zeros(bs)  # global start time of each lane's current segment
+    anyone = True  # some lane is alive
     for e in range(evt_time.shape[1]):
-        if not alive.any():
+        if not anyone:
             break  # every trajectory of the chunk has stopped
         target = evt_time[pad, e]
         if segs > 1:
             target = target - offset  # local time in the current segment
         everyone = width == bs and bool(alive.all())
         pending = alive.copy()  # the live lanes that have not reached their target
-        held = np.zeros(bs, dtype=bool)  # at their target, set aside until the event
-        held_x, held_t = np.empty_like(state), [np.zeros(bs), np.zeros(bs)]
+        held = None  # lanes at their target, set aside until the event (mask, state, time)
+        first = True  # the first call of the event: every live lane is on its way
         while True:
             if not everyone:  # the idle lanes copy the first live lane
                 idle = ~alive
@@ -665,7 +666,8 @@ def _run_chunk(
             # that reached its target in an earlier call goes back there too (heyoka would
             # step it again: its double-length time may miss the target by an ulp)
             start_x, start_t = state.copy(), [t.copy() for t in ta.dtime]
-            done = alive & ~pending
+            done = np.zeros(bs, dtype=bool) if first else alive & ~pending
+            some_done = not first and bool(done.any())
             # most steps any lane still on its way has taken so far
             used = 0 if e == 0 and everyone else int(steps[pending].max())
             ta.propagate_until(target, max_steps=max(max_steps - used, 1))
@@ -673,10 +675,10 @@ def _run_chunk(
             if (
                 outcomes.count(time_limit) == bs
                 and used + max(taken) < max_steps
-                and not done.any()
+                and not some_done
                 and np.abs(state).max() <= bound  # False for NaN
             ):
-                steps += taken if everyone else np.array(taken) * pending
+                steps += taken if everyone and first else np.array(taken) * pending
                 break  # the common case: every lane reached its target
             taken = np.array(taken)
             x = state.T
@@ -700,14 +702,17 @@ def _run_chunk(
                 idx = np.flatnonzero(dead[:width])
                 final[lo + idx] = x[idx]
                 alive &= ~dead
+                anyone = bool(alive.any())
                 everyone = False
             # a lane at its target whose (unwanted) next step is not finite would stop every
             # call: it waits aside, as an idle lane, until the others reach their targets
             sick = done & ~finite
             if sick.any():
-                held_x[:, sick] = start_x[:, sick]
-                held_t[0][sick], held_t[1][sick] = start_t[0][sick], start_t[1][sick]
-                held |= sick
+                if held is None:
+                    held = np.zeros(bs, dtype=bool), np.empty_like(state), np.zeros((2, bs))
+                held[0][sick] = True
+                held[1][:, sick] = start_x[:, sick]
+                held[2][:, sick] = np.array(start_t)[:, sick]
                 alive &= ~sick
                 everyone = False
             back = (done & ~sick) | stopped
@@ -717,16 +722,19 @@ def _run_chunk(
                 ta.set_dtime(np.where(back, start_t[0], np.where(ok, t_hi, 0.0)),
                              np.where(back, start_t[1], np.where(ok, t_lo, 0.0)))
             pending &= alive & ~reached
+            first = False
             if not pending.any():
                 break
-        if held.any():
-            alive |= held
-            state[:, held] = held_x[:, held]
+        if held is not None:
+            back, held_x, held_t = held
+            alive |= back
+            anyone = True
+            state[:, back] = held_x[:, back]
             t_hi, t_lo = ta.dtime
             ok = np.isfinite(t_hi) & np.isfinite(t_lo)
-            ta.set_dtime(np.where(held, held_t[0], np.where(ok, t_hi, 0.0)),
-                         np.where(held, held_t[1], np.where(ok, t_lo, 0.0)))
-        if not alive.any():
+            ta.set_dtime(np.where(back, held_t[0], np.where(ok, t_hi, 0.0)),
+                         np.where(back, held_t[1], np.where(ok, t_lo, 0.0)))
+        if not anyone:
             break
         if final_only and everyone:  # one segment, no samples: the common case
             final[lo:hi] = state[:, :width].T
