@@ -170,6 +170,10 @@ class PolynomialFields:
             return
         if isinstance(e, se.Pow):
             base, ex = e.args
+            if base == se.E:  # symengine writes exp(u) as E**u
+                self._register(ex)
+                self._add_atom("exp", (ex,), e)
+                return
             self._register(base)
             if isinstance(ex, se.Integer):
                 if int(ex) < 0:
@@ -250,6 +254,8 @@ class PolynomialFields:
             return out
         if isinstance(e, se.Pow):
             base, ex = e.args
+            if base == se.E:
+                return self._atom_var("exp", ex)
             if isinstance(ex, se.Integer):
                 k = int(ex)
                 if k >= 0:
