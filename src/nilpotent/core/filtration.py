@@ -13,10 +13,13 @@ How it is computed
    (fixed seed), confirmed at a second one.  A random point is regular with
    probability one, so near $q$ the words chosen up to length $s$ span
    $\\Delta^s$ as a module and $\\Delta^{s+1}(q)$ is spanned by them and the
-   brackets $[X_i, Y]$ with $Y$ a word chosen at length $s$.  A new word
-   $[u, v]$ is evaluated from the fields of $u$ and $v$ by forward-mode
-   directional derivatives (exact rationals, or arb balls), so the longest
-   fields are never expanded.
+   brackets $[X_i, Y]$ with $Y$ a word chosen at length $s$.  Words are
+   evaluated by :class:`~nilpotent.core.word_values.WordValues`: from their
+   fields as polynomials in the coordinates and elementary atoms
+   (:mod:`nilpotent.core.polynomial_fields`; exact rationals where the atoms
+   are rational, certified arb balls elsewhere), or, for fields outside those
+   atoms, from the symengine fields of their halves by forward-mode
+   directional derivatives.
 2. *At p* the Hall words of each length are scanned in order and kept when
    their value at $p$ is independent of those already kept (greedy, earliest
    first).  Since $n_s(p) \\le n_s(q)$, the scan of length $s$ stops as soon as

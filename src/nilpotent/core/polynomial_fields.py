@@ -144,6 +144,7 @@ class PolynomialFields:
             self._dvar.append(self._derivative_of_atom(atom))
         self._fields: dict[Word, tuple[HPoly, ...]] = {}
         self._partials: dict[tuple[Word, int], dict[int, HPoly]] = {}
+        self._norms: dict[int, tuple[tuple[HPoly, ...], list[fmpq]]] = {}
         for i, field in enumerate(generators, start=1):
             self._fields[i] = tuple(self.poly(e) for e in field)
 
@@ -380,6 +381,9 @@ class PolynomialFields:
     def field(self, word: Word) -> tuple[HPoly, ...]:
         """The field of ``word`` (components, in the order of the coordinates), cached.
 
+        Words equal up to sign by antisymmetry ($[v, u] = -[u, v]$, at any depth)
+        share one computation.
+
         Raises
         ------
         ComputationLimitError
@@ -388,14 +392,15 @@ class PolynomialFields:
         hit = self._fields.get(word)
         if hit is not None:
             return hit
-        if isinstance(word, int):  # pragma: no cover - generators are built in __init__
-            raise KeyError(word)
-        u, v = word
-        if u == v:
+        canon, sign = _canonical(word)
+        if sign == 0:
             value: tuple[HPoly, ...] = (ZERO,) * self.sys.n
-        elif (v, u) in self._fields:
-            value = tuple(self.scale(c, fmpq(-1)) for c in self._fields[(v, u)])
+        elif canon != word:
+            value = self.field(canon)
+            if sign < 0:
+                value = tuple(self.scale(c, fmpq(-1)) for c in value)
         else:
+            u, v = word  # type: ignore[misc]
             X, Y = self.field(u), self.field(v)
             out = []
             for j in range(self.sys.n):
@@ -445,9 +450,44 @@ class PolynomialFields:
         args = self.free_point()
         return [c.poly(*args) if c.poly is not None else fmpq(0) for c in field]
 
+    def norms(self, field: tuple[HPoly, ...]) -> list[fmpq]:
+        """The 1-norms of the components' coefficients (cached with the field)."""
+        hit = self._norms.get(id(field))
+        if hit is None or hit[0] is not field:
+            values = [
+                sum((abs(q) for q in c.poly.coeffs()), fmpq(0)) if c.poly is not None
+                else fmpq(0)
+                for c in field
+            ]
+            hit = (field, values)
+            self._norms[id(field)] = hit
+        return hit[1]
+
     def at(self, point: Sequence[object]) -> PointValues:
         """The values of the variables at ``point`` (exact where possible, else balls)."""
         return PointValues(self, point)
+
+
+def _canonical(word: Word) -> tuple[Word, int]:
+    """``(w, s)`` with ``word = s * w``, ``w`` having each pair's halves in a fixed order.
+
+    ``s = 0`` when the word is 0 by antisymmetry ($[u, u] = 0$ at some depth).
+    """
+    if isinstance(word, int):
+        return word, 1
+    cu, su = _canonical(word[0])
+    cv, sv = _canonical(word[1])
+    if su == 0 or sv == 0 or cu == cv:
+        return word, 0
+    if _order(cu) > _order(cv):
+        return (cv, cu), -su * sv
+    return (cu, cv), su * sv
+
+
+def _order(word: Word) -> tuple[int, str]:
+    from nilpotent.core.brackets import word_length
+
+    return word_length(word), repr(word)
 
 
 class PointValues:
@@ -465,6 +505,7 @@ class PointValues:
         self.point = tuple(point)
         self._exact: list[fmpq] | bool | None = False
         self._balls: dict[int, list[arb]] = {}
+        self.undefined: dict[int, str] = {}  # variable index -> why it has no value
 
     # exact -------------------------------------------------------------------------
     def exact_vars(self) -> list[fmpq | None]:
@@ -485,16 +526,29 @@ class PointValues:
         for atom in self.pf.atoms:
             try:
                 value = atom.expr.subs(env) if atom.expr.free_symbols else atom.expr
-            except ZeroDivisionError as exc:
-                raise AtomUndefined("division by zero") from exc
+            except ZeroDivisionError:
+                value = se.zoo
             if value.has(se.zoo) or value.has(se.nan):
-                raise AtomUndefined("division by zero")
+                # an error only for the polynomials that use it (1/a for the derivative
+                # of sqrt(a) is not needed for the value of sqrt(a) at a = 0)
+                self.undefined[len(out)] = "division by zero"
+                out.append(None)
+                continue
             out.append(exact_value(value))
         return out
+
+    def _check_defined(self, field: Sequence[HPoly]) -> None:
+        for c in field:
+            if c.poly is not None and self.undefined:
+                degrees = c.poly.degrees()
+                for i, why in self.undefined.items():
+                    if degrees[i]:
+                        raise AtomUndefined(why)
 
     def exact_field(self, field: Sequence[HPoly]) -> list[fmpq] | None:
         """Exact rational values of the components, or None when a variable they use is not."""
         values = self.exact_vars()
+        self._check_defined(field)
         missing = [i for i, q in enumerate(values) if q is None]
         for c in field:
             if c.poly is not None and missing:
@@ -535,25 +589,36 @@ class PointValues:
                 if q is not None:
                     out.append(arb(q))
                     continue
+                if len(out) in self.undefined:
+                    out.append(arb("nan"))
+                    continue
                 try:
                     out.append(ev.value(atom.expr))
                 except Inaccurate:
                     out.append(arb("nan"))
                 except (NotEvaluable, ZeroDivisionError) as exc:
-                    raise AtomUndefined(str(exc) or "division by zero") from exc
+                    self.undefined[len(out)] = str(exc) or "division by zero"
+                    out.append(arb("nan"))
         finally:
             flint.ctx.prec = old
         self._balls[prec] = out
         return out
 
-    def ball_field(self, field: Sequence[HPoly], prec: int) -> list[arb]:
+    def ball_field(self, field: tuple[HPoly, ...], prec: int) -> list[arb]:
         """Certified enclosures of the components at ``prec`` bits (see the module docstring).
 
         All components are ``nan`` balls when a variable they use could not be
         enclosed (as when a ball evaluation loses all accuracy).
         """
-        values = self.ball_vars(prec)
         n = len(field)
+        norms = self.pf.norms(field)
+        # work with enough more bits that the error bound (proportional to the 1-norm
+        # of the coefficients) stays near 2^-prec of the largest terms
+        extra = max((int(q * c.deg).bit_length() for q, c in zip(norms, field, strict=True)),
+                    default=0)
+        work = prec + 32 * ((extra + 31) // 32)
+        values = self.ball_vars(work)
+        self._check_defined(field)
         used = [False] * len(values)
         degrees = [c.poly.degrees() if c.poly is not None else None for c in field]
         for deg in degrees:
@@ -564,7 +629,7 @@ class PointValues:
         if any(u and not b.is_finite() for u, b in zip(used, values, strict=True)):
             return [arb("nan")] * n
         old = flint.ctx.prec
-        flint.ctx.prec = prec
+        flint.ctx.prec = work
         try:
             mids, exps, radius, bounds = [], [], arb(0), []
             for u, b in zip(used, values, strict=True):
@@ -584,13 +649,12 @@ class PointValues:
             args = [fmpq(m * 2 ** (x + e)) for m, x in zip(mids, exps, strict=True)]
             args.append(fmpq(2**e))
             out = []
-            for c, deg in zip(field, degrees, strict=True):
+            for c, deg, norm1 in zip(field, degrees, norms, strict=True):
                 if c.poly is None or deg is None:
                     out.append(arb(0))
                     continue
                 value = arb(c.poly(*args) / fmpq(2 ** (e * c.deg)))
                 if radius != 0:
-                    norm1 = sum((abs(q) for q in c.poly.coeffs()), fmpq(0))
                     growth = arb(1)
                     for bnd, d in zip(bounds, deg, strict=False):
                         if d:
