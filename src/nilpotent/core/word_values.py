@@ -24,6 +24,7 @@ from nilpotent.core.brackets import (
     word_field_symengine,
 )
 from nilpotent.core.polynomial_fields import AtomUndefined, PolynomialFields, polynomial_fields
+from nilpotent.core.polynomial_values import PointValues
 from nilpotent.core.spans import (
     Evaluator,
     Inaccurate,
@@ -84,7 +85,7 @@ class WordValues:
         self._sym_se: dict[Word, list | None] = {}
         self._free: dict[Word, list] = {}
         self._poly: PolynomialFields | None = polynomial_fields(sys) if box is None else None
-        self._poly_at = self._poly.at(self.point) if self._poly is not None else None
+        self._poly_at = PointValues(self._poly, self.point) if self._poly is not None else None
 
     def vector(self, word: Word) -> WordVector:
         return WordVector(self, word)
