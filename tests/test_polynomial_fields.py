@@ -164,3 +164,26 @@ def test_exact_values_are_fmpq():
     assert vals is not None and all(isinstance(q, fmpq) for q in vals)
     # [X1,X2](0) = -dX1/dtheta0 at 0 = (sin 0, -cos 0, 0, -cos(0)/d1) by hand
     assert vals == [0, -1, 0, -1]
+
+
+@pytest.mark.parametrize(
+    ("model", "point"),
+    [
+        ("trident-snake", "x=1/3,theta=1/5,phi1=1,phi2=-1/2"),
+        ("trident-snake-joints", "x=1/2,y=1/3"),
+        ("car-trailers:3", "theta1=pi/2,theta2=pi,theta3=3*pi/2"),
+        ("car-trailers:3", "theta0=1/3,theta1=-1/4,theta2=1/7,theta3=1"),
+        ("car-trailers:2", "theta1=pi/3"),
+        ("martinet", "x2=0"),
+        ("engel", "x1=1/3,x2=-2"),
+    ],
+)
+def test_the_expression_path_gives_the_same_analysis(model, point, monkeypatch):
+    """A second method: the same analysis with the polynomial form switched off."""
+    import nilpotent.core.word_values as word_values
+    from nilpotent.core.points import parse_point
+
+    fast = analyze(get_model(model), parse_point(point, get_model(model)))
+    monkeypatch.setattr(word_values, "polynomial_fields", lambda sys: None)
+    slow = analyze(get_model(model), parse_point(point, get_model(model)))
+    assert fast.to_json() == slow.to_json()

@@ -159,13 +159,24 @@ class PointValues:
         All components are ``nan`` balls when a variable they use could not be
         enclosed (as when a ball evaluation loses all accuracy).
         """
-        n = len(field)
         norms = self.pf.norms(field)
         # work with enough more bits that the error bound (proportional to the 1-norm
         # of the coefficients) stays near 2^-prec of the largest terms
         extra = max((int(q * c.deg).bit_length() for q, c in zip(norms, field, strict=True)),
                     default=0)
         work = prec + 32 * ((extra + 31) // 32)
+        out = self._ball_field(field, norms, work)
+        # a value much smaller than the 1-norm (cancellation, tiny atoms) loses relative
+        # accuracy: when more than half of the bits are lost, evaluate once more with them
+        lost = max((_magnitude(v.rad()) - _magnitude(v.mid()) + prec for v in out
+                    if v.is_finite() and not v.mid().is_zero() and not v.rad().is_zero()),
+                   default=0)
+        if lost > prec // 2:
+            out = self._ball_field(field, norms, work + 32 * ((min(lost, 4096) + 31) // 32))
+        return out
+
+    def _ball_field(self, field: tuple[HPoly, ...], norms: list[fmpq], work: int) -> list[arb]:
+        n = len(field)
         values = self.ball_vars(work)
         self._check_defined(field)
         used = [False] * len(values)
@@ -214,3 +225,9 @@ class PointValues:
             return out
         finally:
             flint.ctx.prec = old
+
+
+def _magnitude(x: arb) -> int:
+    r"""$\lfloor \log_2 |x| \rfloor + 1$ of a nonzero ball's midpoint (exact exponent, no float)."""
+    man, ex = x.mid().man_exp()
+    return int(ex) + abs(int(man)).bit_length()
