@@ -55,6 +55,7 @@ class PointValues:
         self._exact: list[fmpq | None] | bool = False
         self._balls: dict[int, list[arb]] = {}
         self.undefined: dict[int, str] = {}  # variable index -> why it has no value
+        self._reduced: dict[int, tuple[tuple[HPoly, ...], tuple[HPoly, ...]]] = {}
 
     # exact -------------------------------------------------------------------------
     def exact_vars(self) -> list[fmpq | None]:
@@ -159,6 +160,7 @@ class PointValues:
         All components are ``nan`` balls when a variable they use could not be
         enclosed (as when a ball evaluation loses all accuracy).
         """
+        field = self._without_zeros(field)
         norms = self.pf.norms(field)
         # work with enough more bits that the error bound (proportional to the 1-norm
         # of the coefficients) stays near 2^-prec of the largest terms
@@ -174,6 +176,31 @@ class PointValues:
         if lost > prec // 2:
             out = self._ball_field(field, norms, work + 32 * ((min(lost, 4096) + 31) // 32))
         return out
+
+    def _without_zeros(self, field: tuple[HPoly, ...]) -> tuple[HPoly, ...]:
+        r"""The field with the variables exactly 0 at the point substituted (cached).
+
+        A term with a factor exactly 0 is exactly 0 whatever the other factors'
+        enclosures (as in ball arithmetic, where $0 \cdot [m \pm r] = 0$), so
+        an exact zero stays exact.
+        """
+        zeros = [i for i, q in enumerate(self.exact_vars()) if q is not None and q == 0]
+        if not zeros:
+            return field
+        hit = self._reduced.get(id(field))
+        if hit is not None and hit[0] is field:
+            return hit[1]
+        out = []
+        for c in field:
+            if c.poly is not None:
+                degrees = c.poly.degrees()
+                if any(degrees[i] for i in zeros):
+                    p = c.poly.subs({i: fmpq(0) for i in zeros if degrees[i]})
+                    c = HPoly(p, c.deg) if not p.is_zero() else HPoly(None, 0)
+            out.append(c)
+        reduced = tuple(out)
+        self._reduced[id(field)] = (field, reduced)
+        return reduced
 
     def _ball_field(self, field: tuple[HPoly, ...], norms: list[fmpq], work: int) -> list[arb]:
         n = len(field)
