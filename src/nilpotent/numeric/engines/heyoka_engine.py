@@ -398,7 +398,7 @@ def run_heyoka(
         still = _constant_coordinates(system, sig.harmonics, used)
         frozen_ok = np.ones(batch if rows is None else rows.size, dtype=bool)
         if still:
-            start = xs[:, still] if rows is None else xs[np.ix_(rows, still)]
+            start = xs[:, still] if rows is None else xs[np.ix_(rows, np.asarray(still))]
             frozen_ok = np.all(np.abs(start) <= bound, axis=1)  # False for NaN
         for frozen, mask in ((still, frozen_ok), ((), ~frozen_ok)):
             if not mask.any():
