@@ -47,7 +47,10 @@ parameter (its start value), which removes its Taylor recurrences and those of
 the functions of it (``cos θ``, ``sin θ``).  Its reported values are its start
 value, exactly.  The integrated coordinates keep heyoka's error bound
 ``tol · max(1, ‖x‖∞)`` with the norm over the integrated coordinates only (the
-same or tighter).  A start value that is not finite or beyond ``bound`` is not
+same or tighter: with a held coordinate far above 1, e.g. a car at ``x = 10⁶``
+steering on the spot, the others are integrated more accurately, in more steps,
+so such a trajectory may reach ``max_steps`` where the full integrator did not).
+A start value that is not finite or beyond ``bound`` is not
 frozen, so such a trajectory fails as it would in the full integrator.
 
 Threads: SIMD batches are spread over ``threads`` threads (default
