@@ -652,7 +652,7 @@ def _run_chunk(
             target = target - offset  # local time in the current segment
         everyone = width == bs and bool(alive.all())
         pending = alive.copy()  # the live lanes that have not reached their target
-        held = None  # lanes at their target, set aside until the event (mask, state, time)
+        held = None  # lanes at their target, set aside until the event: mask, state, par, time
         first = True  # the first call of the event: every live lane is on its way
         while True:
             if not everyone:  # the idle lanes copy the first live lane
@@ -712,10 +712,12 @@ def _run_chunk(
             sick = done & ~finite
             if sick.any():
                 if held is None:
-                    held = np.zeros(bs, dtype=bool), np.empty_like(state), np.zeros((2, bs))
+                    held = (np.zeros(bs, dtype=bool), np.empty_like(state), np.empty_like(par),
+                            np.zeros((2, bs)))
                 held[0][sick] = True
                 held[1][:, sick] = start_x[:, sick]
-                held[2][:, sick] = np.array(start_t)[:, sick]
+                held[2][:, sick] = par[:, sick]
+                held[3][:, sick] = np.array(start_t)[:, sick]
                 alive &= ~sick
                 everyone = False
             back = (done & ~sick) | stopped
@@ -729,10 +731,11 @@ def _run_chunk(
             if not pending.any():
                 break
         if held is not None:
-            back, held_x, held_t = held
+            back, held_x, held_p, held_t = held
             alive |= back
             anyone = True
             state[:, back] = held_x[:, back]
+            par[:, back] = held_p[:, back]
             t_hi, t_lo = ta.dtime
             ok = np.isfinite(t_hi) & np.isfinite(t_lo)
             ta.set_dtime(np.where(back, held_t[0], np.where(ok, t_hi, 0.0)),
