@@ -292,3 +292,26 @@ def test_a_batch_mate_that_fails_early_does_not_change_the_rounding_of_the_other
     sol = integrate(cs, x0, sig, times=ts)
     assert Status(int(sol.status[0])) == Status.NON_FINITE and sol.status[1] == Status.SUCCESS
     _assert_alone_equals(sol, cs, x0, sig, [1], times=ts)
+
+
+def test_a_sample_at_the_end_is_the_end_point_on_the_lean_and_the_general_path(snake):
+    # one trajectory (a case found by fuzzing), samples at 0 and at the end: 8 copies fill a
+    # SIMD batch (the lean loop); alone it takes the general path.  A lane already at the
+    # sample's time used to be propagated again on the general path (heyoka took a tiny step:
+    # its double-length time missed the end by an ulp): one more step and a sample an ulp off
+    # the end point, unlike the same trajectory on the lean path
+    x0 = np.array([[-0.8585907222500928, 0.04743562701511905, 0.9680224146953444,
+                    -0.5806349490472504, -0.9775214899820464, -0.9210580813606837]])
+    end = 1.3534222450157285
+    sig = Signal(np.array([[end]]), np.array([[1.4202906434977842]]),
+                 np.array([[[0.0, 1.1043491637529932, 0.48859695301560074]]]),
+                 np.array([[[[0.0], [1.1339476656554355], [-0.44291634251438367]]]]),
+                 np.array([[[[0.0], [0.18999962497042805], [-0.09322356445125386]]]]))
+    ts = [0.0, end]
+    lean = integrate(snake, np.repeat(x0, 8, axis=0), sig.broadcast(8), times=ts, bound=4.0)
+    alone = integrate(snake, x0, sig, times=ts, bound=4.0)
+    assert lean.all_ok and alone.all_ok
+    np.testing.assert_array_equal(lean.samples[:, 1], lean.final)
+    np.testing.assert_array_equal(alone.samples[:, 1], alone.final)
+    np.testing.assert_array_equal(lean.final[0], alone.final[0])
+    assert lean.steps[0] == alone.steps[0]

@@ -643,6 +643,7 @@ def _run_chunk(
     all_lanes = np.arange(width)
     final_only = evt_time.shape[1] == 1
     offset = np.zeros(bs)  # global start time of each lane's current segment
+    at = np.zeros(bs)  # local time of each lane's last event
     anyone = True  # some lane is alive
     for e in range(evt_time.shape[1]):
         if not anyone:
@@ -651,10 +652,14 @@ def _run_chunk(
         if segs > 1:
             target = target - offset  # local time in the current segment
         everyone = width == bs and bool(alive.all())
-        pending = alive.copy()  # the live lanes that have not reached their target
+        # the live lanes that have not reached their target; one already there (a sample at a
+        # segment end or at the end) is not propagated: heyoka would take a tiny step (its
+        # double-length time may miss the target by an ulp), which the lean loop does not
+        already = alive & (target == at)
+        pending = alive & ~already
         held = None  # lanes at their target, set aside until the event: mask, state, par, time
-        first = True  # the first call of the event: every live lane is on its way
-        while True:
+        first = not already.any()  # the first call, every live lane on its way
+        while pending.any():
             if not everyone:  # the idle lanes copy the first live lane
                 idle = ~alive
                 donor = int(np.argmax(alive))
@@ -671,8 +676,9 @@ def _run_chunk(
             start_x, start_t = state.copy(), [t.copy() for t in ta.dtime]
             done = np.zeros(bs, dtype=bool) if first else alive & ~pending
             some_done = not first and bool(done.any())
+            everyone_on = everyone and first
             # most steps any lane still on its way has taken so far
-            used = 0 if e == 0 and everyone else int(steps[pending].max())
+            used = 0 if e == 0 and everyone_on else int(steps[pending].max())
             ta.propagate_until(target, max_steps=max(max_steps - used, 1))
             outcomes, _, _, taken = zip(*ta.propagate_res, strict=True)
             if (
@@ -681,7 +687,7 @@ def _run_chunk(
                 and not some_done
                 and np.abs(state).max() <= bound  # False for NaN
             ):
-                steps += taken if everyone and first else np.array(taken) * pending
+                steps += taken if everyone_on else np.array(taken) * pending
                 break  # the common case: every lane reached its target
             taken = np.array(taken)
             x = state.T
@@ -728,8 +734,6 @@ def _run_chunk(
                              np.where(back, start_t[1], np.where(ok, t_lo, 0.0)))
             pending &= alive & ~reached
             first = False
-            if not pending.any():
-                break
         if held is not None:
             back, held_x, held_p, held_t = held
             alive |= back
@@ -745,6 +749,7 @@ def _run_chunk(
         if final_only and everyone:  # one segment, no samples: the common case
             final[lo:hi] = state[:, :width].T
             continue
+        at = np.where(alive, target, at)
         live = all_lanes if alive.all() else np.flatnonzero(alive[:width])
         kind = evt_kind[lo + live, e]
         switch = kind < segs - 1
@@ -752,6 +757,7 @@ def _run_chunk(
             lanes = live[switch]
             par[:, lanes] = pars[lo + lanes, kind[switch] + 1].T
             offset[lanes] = evt_time[lo + lanes, e]
+            at[lanes] = 0.0
             restart = ~alive  # idle lanes (a stopped one's time may be NaN): synced later
             restart[lanes] = True
             t_hi, t_lo = ta.dtime  # the other lanes keep their time exactly
