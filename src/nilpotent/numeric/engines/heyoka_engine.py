@@ -27,10 +27,11 @@ when ``atol = 0``), which bounds the local error by both ``atol`` (states below
 1) and ``rtol·‖x‖∞`` (larger states).  Taylor steps are never rejected.
 
 Failures: a trajectory is stopped when its state becomes non-finite
-(:attr:`Status.NON_FINITE`), when it ends a propagation with some
-``|x_k| > bound`` (:attr:`Status.BLOW_UP`; the reported state is the first one
-found beyond the bound, not the crossing point), or after ``max_steps`` steps
-(:attr:`Status.MAX_STEPS`).  The other lanes of its SIMD batch go on.  There is
+(:attr:`Status.NON_FINITE`), when it reaches one of its events (a segment end,
+a sample time) with some ``|x_k| > bound`` (:attr:`Status.BLOW_UP`; the
+reported state is the one at that event, not the crossing point), or after
+``max_steps`` of its own steps (:attr:`Status.MAX_STEPS`).  The other lanes of
+its SIMD batch go on, and none of this depends on them.  There is
 no minimum step size: near a finite-time blow-up Taylor steps shrink until the
 state overflows, which takes a few hundred steps.
 
@@ -46,7 +47,10 @@ parameter (its start value), which removes its Taylor recurrences and those of
 the functions of it (``cos θ``, ``sin θ``).  Its reported values are its start
 value, exactly.  The integrated coordinates keep heyoka's error bound
 ``tol · max(1, ‖x‖∞)`` with the norm over the integrated coordinates only (the
-same or tighter).  A start value that is not finite or beyond ``bound`` is not
+same or tighter: with a held coordinate far above 1, e.g. a car at ``x = 10⁶``
+steering on the spot, the others are integrated more accurately, in more steps,
+so such a trajectory may reach ``max_steps`` where the full integrator did not).
+A start value that is not finite or beyond ``bound`` is not
 frozen, so such a trajectory fails as it would in the full integrator.
 
 Threads: SIMD batches are spread over ``threads`` threads (default
@@ -81,13 +85,11 @@ import sympy as sp
 from nilpotent.errors import MissingExtraError
 from nilpotent.numeric.compile import CompiledSystem
 from nilpotent.numeric.engines import Engine, EngineOutput
+from nilpotent.numeric.engines.heyoka_events import run_chunk
 from nilpotent.numeric.signals import Signal
 
 #: How to install the optional dependency.
 INSTALL_HINT = 'pip install "heyoka>=7.13" (part of the default install of nilpotent)'
-
-# Status codes (the values of nilpotent.numeric.integrate.Status).
-_SUCCESS, _MAX_STEPS, _BLOW_UP, _NON_FINITE = 0, 1, 3, 4
 
 
 class HeyokaEngine(Engine):
@@ -376,7 +378,8 @@ def run_heyoka(
     state, the steps and the lanes' end times; afterwards one vectorised check finds batches in
     which a lane failed (stopped early, too many steps, non-finite, beyond
     ``bound``) and integrates those again on the general path
-    (:func:`_run_chunk`), which stops and reports the failing lanes.
+    (:func:`~nilpotent.numeric.engines.heyoka_events.run_chunk`), which stops and
+    reports the failing lanes.
     """
     pars = _parameters(sig)
     ends = np.cumsum(sig.durations, axis=1)
@@ -397,7 +400,7 @@ def run_heyoka(
         still = _constant_coordinates(system, sig.harmonics, used)
         frozen_ok = np.ones(batch if rows is None else rows.size, dtype=bool)
         if still:
-            start = xs[:, still] if rows is None else xs[np.ix_(rows, still)]
+            start = xs[:, still] if rows is None else xs[np.ix_(rows, np.asarray(still))]
             frozen_ok = np.all(np.abs(start) <= bound, axis=1)  # False for NaN
         for frozen, mask in ((still, frozen_ok), ((), ~frozen_ok)):
             if not mask.any():
@@ -542,7 +545,7 @@ def _run_group(
             if k >= len(jobs):
                 return
             lo, hi = jobs[k]
-            _run_chunk(ta, lo, hi, xs, pars, evt_time, evt_kind, segs, final, samples, info,
+            run_chunk(ta, lo, hi, xs, pars, evt_time, evt_kind, segs, final, samples, info,
                        max_steps, bound, outcomes)
 
     def run_all(work: Any, count: int) -> None:
@@ -591,107 +594,3 @@ def lean_path(segs: int, full: int, ends: np.ndarray, ts: np.ndarray) -> bool:
     at_start = ts == 0.0
     at_end = np.all(ends[:, -1:] == ts[None, :], axis=0) & ~at_start
     return segs == 1 and full > 0 and bool(np.all(at_start | at_end))
-
-
-def _run_chunk(
-    ta: Any,
-    lo: int,
-    hi: int,
-    xs: np.ndarray,
-    pars: np.ndarray,
-    evt_time: np.ndarray,
-    evt_kind: np.ndarray,
-    segs: int,
-    final: np.ndarray,
-    samples: np.ndarray,
-    info: np.ndarray,
-    max_steps: int,
-    bound: float,
-    outcomes_of_interest: tuple[Any, Any],
-) -> None:
-    """Integrate trajectories ``lo:hi`` (≤ one SIMD batch) through all their events.
-
-    ``outcomes_of_interest``: heyoka's ``(time_limit, step_limit)`` outcomes.
-    """
-    time_limit, step_limit = outcomes_of_interest
-    bs = ta.batch_size
-    width = hi - lo
-    rows = np.arange(lo, hi)
-    # lanes → trajectories; spare lanes (last chunk) repeat the chunk's trajectories
-    pad = slice(lo, hi) if width == bs else lo + np.arange(bs) % width
-    state = ta.state
-    par = ta.pars
-    state[:] = xs[pad].T
-    par[:] = pars[pad, 0].T
-    ta.set_time(np.zeros(bs))
-    alive = np.ones(bs, dtype=bool)
-    alive[width:] = False
-    par[:, width:] = 0.0  # spare lanes: zero inputs, nothing moves
-    status = np.zeros(bs, dtype=np.int64)
-    steps = np.zeros(bs, dtype=np.int64)
-    all_lanes = np.arange(width)
-    final_only = evt_time.shape[1] == 1
-    offset = np.zeros(bs)  # global start time of each lane's current segment
-    for e in range(evt_time.shape[1]):
-        target = evt_time[pad, e]
-        if segs > 1:
-            target = target - offset  # local time in the current segment
-        everyone = width == bs and bool(alive.all())
-        if not everyone:
-            target = np.where(alive, target, ta.time)
-        while True:
-            # most steps any live lane has taken so far
-            fresh = (e == 0 and everyone) or not alive.any()
-            used = 0 if fresh else int(steps[alive].max())
-            ta.propagate_until(target, max_steps=max(max_steps - used, 1))
-            outcomes, _, _, taken = zip(*ta.propagate_res, strict=True)
-            steps += taken if everyone else np.array(taken) * alive
-            if (
-                outcomes.count(time_limit) == bs
-                and used + max(taken) < max_steps
-                and np.abs(state).max() <= bound  # False for NaN
-            ):
-                break  # the common case: every lane reached its target
-            x = state.T
-            finite = np.all(np.isfinite(x), axis=1)
-            big = np.any(np.abs(np.where(np.isfinite(x), x, 0.0)) > bound, axis=1)
-            reached = np.array([o == time_limit for o in outcomes])
-            over = np.array([o == step_limit for o in outcomes]) | (steps >= max_steps)
-            dead = alive & (~finite | big | (over & ~reached))
-            if dead.any():
-                status[dead] = np.where(~finite[dead], _NON_FINITE,
-                                        np.where(big[dead], _BLOW_UP, _MAX_STEPS))
-                idx = np.flatnonzero(dead[:width])
-                final[lo + idx] = x[idx]
-                alive &= ~dead
-                # park the stopped lanes: zero state and inputs, target = their time
-                state[:, dead] = 0.0
-                par[:, dead] = 0.0
-                if not np.isfinite(ta.time).all():  # a lane that blew up: restart its clock
-                    ta.set_time(np.where(np.isfinite(ta.time), ta.time, 0.0))
-                target = np.where(alive, target, ta.time)
-                everyone = False
-            if np.all(reached | ~alive):
-                break
-            # a lane stopped the whole SIMD batch: the others go on from where they are
-        if final_only and everyone:  # one segment, no samples: the common case
-            final[lo:hi] = state[:, :width].T
-            continue
-        live = all_lanes if alive.all() else np.flatnonzero(alive[:width])
-        kind = evt_kind[lo + live, e]
-        switch = kind < segs - 1
-        if switch.any():  # the next segment's inputs
-            lanes = live[switch]
-            par[:, lanes] = pars[lo + lanes, kind[switch] + 1].T
-            offset[lanes] = evt_time[lo + lanes, e]
-            restart = np.zeros(bs, dtype=bool)
-            restart[lanes] = True
-            ta.set_time(np.where(restart, 0.0, ta.time))
-        end = kind == segs - 1
-        if end.any():
-            final[lo + live[end]] = state[:, live[end]].T
-        smp = kind >= segs
-        if smp.any():
-            samples[lo + live[smp], kind[smp] - segs] = state[:, live[smp]].T
-    info[rows, 0] = status[:width]
-    info[rows, 1] = steps[:width]
