@@ -211,3 +211,19 @@ def test_a_singular_field_gives_a_status_not_an_exception(method, engine):
     assert not sol.ok[0]
     # from x = 1: x² = 1 + 2t, so x(1) = sqrt(3)
     assert sol.ok[1] and abs(sol.final[1, 0] - math.sqrt(3)) < 1e-8
+
+
+@pytest.mark.parametrize(("engine", "method"), [("numba", "adaptive"), ("numba", "fixed"),
+                                                ("heyoka", "adaptive"), ("scipy", "adaptive"),
+                                                ("numpy", "fixed"), ("auto", "adaptive")])
+def test_an_empty_batch_gives_an_empty_solution(engine, method):
+    # no initial states: nothing to integrate, every array has 0 rows and the right shape
+    from nilpotent.numeric.engines import ENGINES
+
+    if engine != "auto" and not ENGINES[engine].available():
+        pytest.skip(f"{engine} not installed")
+    cs = compile_system(get_model("trident-snake"))
+    sol = integrate(cs, np.zeros((0, 6)), bracket_inputs(3, 1, 2, np.zeros(0)),
+                    engine=engine, method=method, times=[0.0, 1.0])
+    assert sol.final.shape == (0, 6) and sol.samples.shape == (0, 2, 6)
+    assert sol.status.shape == sol.steps.shape == (0,) and sol.all_ok

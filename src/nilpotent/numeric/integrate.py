@@ -207,10 +207,21 @@ def integrate(
     if max_steps < 1 or not bound > 0:
         raise OptionError("max_steps must be >= 1 and bound > 0")
     if min_step is None:
-        min_step = 1e-13 * float(np.max(total))
+        min_step = 1e-13 * float(np.max(total)) if batch else 0.0
     chosen = choose_engine(system, method, engine, batch)
     chosen.require()
     adaptive = method == "adaptive"
+    if batch == 0:  # nothing to integrate: an empty solution of the right shapes
+        empty = np.zeros((0, 4))
+        final, samples, info = np.zeros((0, system.n)), np.zeros((0, ts.size, system.n)), empty
+        return BatchSolution(
+            method=method, engine=chosen.name, x0=_ro(xs), final=_ro(final), times=_ro(ts),
+            samples=_ro(samples), status=_ro(np.zeros(0, dtype=np.int64)),
+            steps=_ro(np.zeros(0, dtype=np.int64)), rejected=_ro(np.zeros(0, dtype=np.int64)),
+            error_estimate=_ro(np.zeros(0)),
+            tolerance=float(rtol) if adaptive else float("nan"), rtol=float(rtol),
+            atol=float(atol), steps_per_segment=int(steps) if method == "fixed" else 0,
+        )
 
     def run(step_count: int, adaptive_steps: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return chosen.solve(system, xs, sig, ts, adaptive=adaptive_steps, steps=step_count,

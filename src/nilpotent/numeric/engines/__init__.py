@@ -156,13 +156,18 @@ class Engine(abc.ABC):
 
 
 def check_times(times: Any, total: np.ndarray) -> np.ndarray:
-    """``times`` as a sorted ``(T,)`` float array within ``[0, min(total)]``; ``None``: none."""
+    """``times`` as a sorted ``(T,)`` float array within ``[0, min(total)]``; ``None``: none.
+
+    ``total`` ``(B,)`` the trajectories' durations; with ``B = 0`` only ``>= 0`` is checked.
+    """
     if times is None:
         return np.zeros(0)
     ts = np.ascontiguousarray(np.asarray(times, dtype=np.float64).ravel())
     if ts.size and (not np.all(np.isfinite(ts)) or np.any(np.diff(ts) < 0)):
         raise OptionError("sample times must be finite and sorted")
-    if ts.size and (ts[0] < 0 or ts[-1] > float(np.min(total)) * (1 + 1e-12)):
+    if ts.size and ts[0] < 0:
+        raise OptionError("sample times must be >= 0")
+    if ts.size and total.size and ts[-1] > float(np.min(total)) * (1 + 1e-12):
         raise OptionError(
             f"sample times must lie in [0, {float(np.min(total))}] (the input's duration)"
         )
