@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 import symengine as se
 
 from nilpotent.core.brackets import word_field_symengine
+from nilpotent.core.spans import to_double
 from nilpotent.core.taylor import Poly, to_symengine, weighted_degree, weighted_jets
 
 if TYPE_CHECKING:
@@ -52,21 +53,56 @@ def exponential_map(ctx: _Context, degree: int) -> list[Poly]:
     if key in cache:
         return cache[key]
     E = [Poly.constant(n, to_symengine(v)) for v in ctx.p]
-    for l, word in enumerate(ctx.filtration.frame):
-        wl = w[l]
+    for l, wl in enumerate(w):
         if wl > degree:
             continue
-        Y = word_field_symengine(ctx.sys, word)
         base = E
         cur = base
         # The error of the k-th iterate has weighted order >= (k + 1) w_l (the integral
         # adds w_l), so ceil((degree + 1) / w_l) - 1 iterations are exact to ``degree``.
         for _ in range(-(-(degree + 1) // wl) - 1):
-            vals = weighted_jets(Y, ctx.xsyms, cur, w, degree - wl, ctx.numeric)
+            vals = frame_jets_along(ctx, l, cur, degree - wl)
             cur = [b + integrate(v, l) for b, v in zip(base, vals, strict=True)]
         E = cur
     cache[key] = E
     return E
+
+
+def frame_jets_along(ctx: _Context, l: int, cur: Sequence[Poly], degree: int) -> list[Poly]:
+    r"""Weighted jets of $Y_l(\varphi(s))$ to degree ``degree`` along $x = \varphi(s)$ (``cur``).
+
+    Two steps instead of one series of $Y_l\circ\varphi$: the Taylor jet of
+    $Y_l(p + d)$ in $d = x - p$, where $d_k$ has the weight $\nu_k$ = the least
+    weighted degree (in $s$) of a term of $\varphi_k - p_k$ (capped at ``degree`` + 1),
+    truncated at $\nu$-degree ``degree`` (a monomial $d^\beta$ with
+    $\nu(\beta) >$ ``degree`` composes to terms of degree $>$ ``degree`` only); then that
+    polynomial composed with $d = \varphi(s) - p$, truncated.  The jet in $d$ is computed
+    once per weights $\nu$ and reused by every Picard iterate; degree 0 is the frame's
+    value at $p$ (from the filtration: the field is not needed).
+    """
+    n, w = ctx.n, ctx.weights
+    cache = ctx.__dict__.setdefault("cache", {})
+    if degree == 0:
+        key0 = ("frame_value", l)
+        if key0 not in cache:
+            values = [to_symengine(v) for v in ctx.filtration.frame_values[l]]
+            if ctx.numeric:
+                values = [se.RealDouble(to_double(v)) if v != 0 else v for v in values]
+            cache[key0] = [Poly.constant(n, v) for v in values]
+        return cache[key0]
+    d = [c - Poly.constant(n, to_symengine(p)) for c, p in zip(cur, ctx.p, strict=True)]
+    nu = tuple(
+        min([weighted_degree(m, w) for m in dk.terms] + [degree + 1]) for dk in d
+    )
+    key = ("frame_jet", l, nu, degree)
+    jet = cache.get(key)
+    if jet is None:
+        Y = word_field_symengine(ctx.sys, ctx.filtration.frame[l])
+        shifted = [Poly.constant(n, to_symengine(p)) + Poly.variable(n, k)
+                   for k, p in enumerate(ctx.p)]
+        jet = weighted_jets(Y, ctx.xsyms, shifted, nu, degree, ctx.numeric)
+        cache[key] = jet
+    return [c.compose(d, w, degree) for c in jet]
 
 
 def exponential_grading(weights: Sequence[int], chi: Sequence[Poly]) -> list[int]:
