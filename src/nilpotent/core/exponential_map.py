@@ -21,9 +21,9 @@ from typing import TYPE_CHECKING
 
 import symengine as se
 
-from nilpotent.core.brackets import word_field_symengine
-from nilpotent.core.spans import to_double
+from nilpotent.core.brackets import SeField, Word, word_field_symengine
 from nilpotent.core.taylor import Poly, to_symengine, weighted_degree, weighted_jets
+from nilpotent.errors import ComputationLimitError
 
 if TYPE_CHECKING:
     from nilpotent.core.privileged import Built, _Context
@@ -68,6 +68,37 @@ def exponential_map(ctx: _Context, degree: int) -> list[Poly]:
     return E
 
 
+def frame_field(ctx: _Context, word: Word) -> SeField:
+    r"""The field of a frame word in symengine: expanded, or else the bracket of its halves.
+
+    The expanded field (:func:`~nilpotent.core.brackets.word_field_symengine`, cached on
+    the system) where its size is within
+    :data:`~nilpotent.core.brackets.EXPANSION_TERMS_BUDGET`; past it, $[u, v] =
+    Dv\cdot u - Du\cdot v$ written with the fields of $u$ and $v$ and left unexpanded
+    (only low-order jets of the longest words are ever taken, and the series of the
+    unexpanded form never builds the expansion).  Cached on ``ctx``.
+    """
+    cache = ctx.__dict__.setdefault("cache", {})
+    key = ("frame_field", word)
+    if key in cache:
+        return cache[key]
+    try:
+        field = word_field_symengine(ctx.sys, word)
+    except ComputationLimitError:
+        if isinstance(word, int):
+            raise
+        u, v = frame_field(ctx, word[0]), frame_field(ctx, word[1])
+        field = tuple(
+            se.Add(
+                *[uk * vj.diff(x) for uk, x in zip(u, ctx.xsyms, strict=True) if uk != 0],
+                *[-vk * uj.diff(x) for vk, x in zip(v, ctx.xsyms, strict=True) if vk != 0],
+            )
+            for uj, vj in zip(u, v, strict=True)
+        )
+    cache[key] = field
+    return field
+
+
 def frame_jets_along(ctx: _Context, l: int, cur: Sequence[Poly], degree: int) -> list[Poly]:
     r"""Weighted jets of $Y_l(\varphi(s))$ to degree ``degree`` along $x = \varphi(s)$ (``cur``).
 
@@ -81,13 +112,15 @@ def frame_jets_along(ctx: _Context, l: int, cur: Sequence[Poly], degree: int) ->
     value at $p$ (from the filtration: the field is not needed).
     """
     n, w = ctx.n, ctx.weights
+    if ctx.numeric:
+        # floats: one series along the iterate, as computed before (same rounding)
+        Y = frame_field(ctx, ctx.filtration.frame[l])
+        return weighted_jets(Y, ctx.xsyms, cur, w, degree, True)
     cache = ctx.__dict__.setdefault("cache", {})
     if degree == 0:
         key0 = ("frame_value", l)
         if key0 not in cache:
             values = [to_symengine(v) for v in ctx.filtration.frame_values[l]]
-            if ctx.numeric:
-                values = [se.RealDouble(to_double(v)) if v != 0 else v for v in values]
             cache[key0] = [Poly.constant(n, v) for v in values]
         return cache[key0]
     d = [c - Poly.constant(n, to_symengine(p)) for c, p in zip(cur, ctx.p, strict=True)]
@@ -97,7 +130,7 @@ def frame_jets_along(ctx: _Context, l: int, cur: Sequence[Poly], degree: int) ->
     key = ("frame_jet", l, nu, degree)
     jet = cache.get(key)
     if jet is None:
-        Y = word_field_symengine(ctx.sys, ctx.filtration.frame[l])
+        Y = frame_field(ctx, ctx.filtration.frame[l])
         shifted = [Poly.constant(n, to_symengine(p)) + Poly.variable(n, k)
                    for k, p in enumerate(ctx.p)]
         jet = weighted_jets(Y, ctx.xsyms, shifted, nu, degree, ctx.numeric)
@@ -122,7 +155,7 @@ def first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
     nv = n + 1
     wt = [*w, 0]
     point = [Poly.constant(nv, to_symengine(v)) for v in ctx.p]
-    frame = [word_field_symengine(ctx.sys, word) for word in ctx.filtration.frame]
+    frame = [frame_field(ctx, word) for word in ctx.filtration.frame]
     flat = [c for f in frame for c in f]
     ys = [Poly.variable(nv, j) for j in range(n)]
     cur = point
