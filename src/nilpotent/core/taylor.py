@@ -29,6 +29,7 @@ Zero tests
 
 from __future__ import annotations
 
+import functools
 import operator
 from collections.abc import Iterable, Mapping, Sequence
 from typing import cast
@@ -40,6 +41,9 @@ from nilpotent.core.spans import is_zero, to_double
 from nilpotent.errors import PointError
 
 Monomial = tuple[int, ...]
+
+_CANONICAL_ORDER = functools.cmp_to_key(sp.Basic.compare)
+"""The order in which sympy's ``Add`` and ``Mul`` keep their arguments."""
 
 __all__ = [
     "Monomial",
@@ -60,7 +64,7 @@ def to_symengine(expr: object) -> se.Basic:
 
 def weighted_degree(mono: Monomial, weights: Sequence[int]) -> int:
     r"""The weighted degree $\sum_k w_k \alpha_k$ of the monomial $y^\alpha$."""
-    return sum(a * w for a, w in zip(mono, weights, strict=True) if a)
+    return sum(map(operator.mul, mono, weights))
 
 
 def _clean(c: se.Basic) -> se.Basic:
@@ -262,6 +266,9 @@ class Poly:
                 ((weighted_degree(m, weights), m, c) for m, c in other.terms.items()),
                 key=lambda t: t[0],
             )
+        if degree is not None and pairs_b:
+            lowest = pairs_b[0][0]
+            items_a = [t for t in items_a if t[0] + lowest <= degree]
         for da, ma, ca in items_a:
             for db, mb, cb in pairs_b:
                 if degree is not None and da + db > degree:
@@ -326,6 +333,74 @@ class Poly:
             out.append(se.Mul(*f))
         return se.Add(*out) if out else se.Integer(0)
 
+    def _to_sympy_canonical(self, symbols: Sequence[sp.Expr]) -> sp.Expr | None:
+        """The sympy expression built directly in sympy's canonical form, or ``None``.
+
+        Applies to rational coefficients and variables that are distinct symbols or
+        shifted symbols ``x - c`` (``c`` a number).  A term ``q * prod(v_k**a_k)`` is
+        ``Mul(q, *powers)`` with the factors in sympy's canonical order
+        (:meth:`sympy.Basic.compare`, by which ``Mul`` and ``Add`` sort their
+        arguments); the few terms sympy rewrites (a number times one shifted variable,
+        which ``Mul`` distributes, and the constant) go through sympy's constructors;
+        the sum is their union in canonical order, the number first, as ``Add``
+        builds it (the other terms are distinct monomials: nothing to collect), without
+        the constructors' checks and flattening on every term (seconds on thousands
+        of terms).  Elsewhere ``None``: the constructors decide.
+        """
+        bases: list[sp.Symbol] = []
+        for x in symbols:
+            if isinstance(x, sp.Symbol):
+                bases.append(x)
+                continue
+            if not isinstance(x, sp.Add):
+                return None
+            syms = [a for a in x.args if isinstance(a, sp.Symbol)]
+            if len(syms) != 1 or not all(a.is_number for a in x.args if a is not syms[0]):
+                return None
+            bases.append(syms[0])
+        if len(set(bases)) != len(bases):
+            return None
+        powers: dict[tuple[int, int], sp.Expr] = {}
+        special: list[sp.Expr] = []
+        terms: list[sp.Expr] = []
+        for m, c in self.terms.items():
+            if isinstance(c, se.Integer):
+                q: sp.Expr = sp.Integer(int(c))
+            elif isinstance(c, se.Rational):
+                num, den = c.get_num_den()
+                q = sp.Rational(int(num), int(den))
+            else:
+                return None
+            factors: list[sp.Expr] = []
+            for k, a in enumerate(m):
+                if a:
+                    pw = powers.get((k, a))
+                    if pw is None:
+                        pw = powers[(k, a)] = symbols[k] if a == 1 else sp.Pow(symbols[k], a)
+                    factors.append(pw)
+            if not factors or (len(factors) == 1 and isinstance(factors[0], sp.Add)):
+                special.append(sp.Mul(q, *factors))
+                continue
+            factors.sort(key=_CANONICAL_ORDER)
+            if q == 1:
+                terms.append(factors[0] if len(factors) == 1 else sp.Mul._from_args(factors))
+            else:
+                terms.append(sp.Mul._from_args([q, *factors]))
+        number: sp.Expr = sp.Integer(0)
+        if special:
+            rest = sp.Add(*special)
+            for a in sp.Add.make_args(rest):
+                if a.is_Number:
+                    number = a
+                elif a != 0:
+                    terms.append(a)
+        terms.sort(key=_CANONICAL_ORDER)
+        if number != 0:
+            terms.insert(0, number)
+        if not terms:
+            return sp.Integer(0)
+        return terms[0] if len(terms) == 1 else cast(sp.Expr, sp.Add._from_args(terms))
+
     def to_sympy(self, symbols: Sequence[sp.Expr], *, keep_factors: bool = False) -> sp.Expr:
         """The polynomial as a sympy expression in ``symbols`` (symbols or expressions).
 
@@ -333,6 +408,9 @@ class Poly:
         not distributed over a factor such as ``(x - 1/3)`` (which would round ``1/3``).
         """
         if not keep_factors:
+            direct = self._to_sympy_canonical(symbols)
+            if direct is not None:
+                return direct
             # built by symengine (fast on thousands of terms), converted once
             ses = [se.S(x) for x in symbols]
             total = se.Add(
