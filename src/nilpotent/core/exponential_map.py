@@ -45,7 +45,8 @@ def exponential_map(ctx: _Context, degree: int) -> list[Poly]:
 
     Each flow by Picard iteration $x \leftarrow E_{l-1} + \int_0^{s_l} Y_l(x)$ on
     weighted jets (the integral raises the weighted degree by $w_l$, so a fixed
-    number of iterations is exact to ``degree``).
+    number of iterations is exact to ``degree``); the jets of $Y_l$ along an
+    iterate by :func:`frame_jets_along`.
     """
     n, w = ctx.n, ctx.weights
     key = ("exponential_map", degree)
@@ -112,10 +113,12 @@ def frame_jets_along(ctx: _Context, l: int, cur: Sequence[Poly], degree: int) ->
     value at $p$ (from the filtration: the field is not needed).
     """
     n, w = ctx.n, ctx.weights
-    if ctx.numeric:
-        # floats: one series along the iterate, as computed before (same rounding)
+    d = [c - Poly.constant(n, to_symengine(p)) for c, p in zip(cur, ctx.p, strict=True)]
+    if ctx.numeric or any(dk.value_at_zero() != 0 for dk in d):
+        # floats: one series along the iterate, as computed before (same rounding); and a
+        # map that does not start at p (never built here) has no jet in d to reuse
         Y = frame_field(ctx, ctx.filtration.frame[l])
-        return weighted_jets(Y, ctx.xsyms, cur, w, degree, True)
+        return weighted_jets(Y, ctx.xsyms, cur, w, degree, ctx.numeric)
     cache = ctx.__dict__.setdefault("cache", {})
     if degree == 0:
         key0 = ("frame_value", l)
@@ -123,7 +126,6 @@ def frame_jets_along(ctx: _Context, l: int, cur: Sequence[Poly], degree: int) ->
             values = [to_symengine(v) for v in ctx.filtration.frame_values[l]]
             cache[key0] = [Poly.constant(n, v) for v in values]
         return cache[key0]
-    d = [c - Poly.constant(n, to_symengine(p)) for c, p in zip(cur, ctx.p, strict=True)]
     nu = tuple(
         min([weighted_degree(m, w) for m in dk.terms] + [degree + 1]) for dk in d
     )
