@@ -133,8 +133,14 @@ def frame_jets_along(ctx: _Context, l: int, cur: Sequence[Poly], degree: int) ->
     jet = cache.get(key)
     if jet is None:
         Y = frame_field(ctx, ctx.filtration.frame[l])
-        shifted = [Poly.constant(n, to_symengine(p)) + Poly.variable(n, k)
-                   for k, p in enumerate(ctx.p)]
+        # x_k = p_k + d_k; where d_k cannot reach the degree (nu_k > degree), x_k = p_k:
+        # the expression collapses before its series (cos(0) = 1, ...)
+        shifted = [
+            Poly.constant(n, to_symengine(p)) + Poly.variable(n, k)
+            if nu[k] <= degree
+            else Poly.constant(n, to_symengine(p))
+            for k, p in enumerate(ctx.p)
+        ]
         jet = weighted_jets(Y, ctx.xsyms, shifted, nu, degree, ctx.numeric)
         cache[key] = jet
     return [c.compose(d, w, degree) for c in jet]
