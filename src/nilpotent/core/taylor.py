@@ -256,26 +256,35 @@ class Poly:
         weighted degree and the scan stops at the first pair beyond ``degree``.
         """
         terms: dict[Monomial, se.Basic] = {}
+        get = terms.get
+        add = operator.add
         if degree is None:
-            pairs_b = [(0, mb, cb) for mb, cb in other.terms.items()]
-            items_a = [(0, ma, ca) for ma, ca in self.terms.items()]
-        else:
-            assert weights is not None
-            items_a = [(weighted_degree(m, weights), m, c) for m, c in self.terms.items()]
-            pairs_b = sorted(
-                ((weighted_degree(m, weights), m, c) for m, c in other.terms.items()),
-                key=lambda t: t[0],
-            )
-        if degree is not None and pairs_b:
-            lowest = pairs_b[0][0]
-            items_a = [t for t in items_a if t[0] + lowest <= degree]
-        for da, ma, ca in items_a:
+            for ma, ca in self.terms.items():
+                for mb, cb in other.terms.items():
+                    m = tuple(map(add, ma, mb))
+                    v = ca * cb
+                    old = get(m)
+                    terms[m] = v if old is None else old + v
+            return Poly(self.nvars, terms)
+        assert weights is not None
+        pairs_b = sorted(
+            ((weighted_degree(m, weights), m, c) for m, c in other.terms.items()),
+            key=operator.itemgetter(0),
+        )
+        if not pairs_b:
+            return Poly(self.nvars)
+        lowest = pairs_b[0][0]
+        for ma, ca in self.terms.items():
+            room = degree - weighted_degree(ma, weights)
+            if room < lowest:
+                continue
             for db, mb, cb in pairs_b:
-                if degree is not None and da + db > degree:
+                if db > room:
                     break
-                m = tuple(map(operator.add, ma, mb))
+                m = tuple(map(add, ma, mb))
                 v = ca * cb
-                terms[m] = terms[m] + v if m in terms else v
+                old = get(m)
+                terms[m] = v if old is None else old + v
         return Poly(self.nvars, terms)
 
     def diff(self, k: int) -> Poly:
