@@ -18,6 +18,7 @@ import nilpotent.core.brackets as brackets
 from nilpotent.core.brackets import word_field_symengine
 from nilpotent.core.exponential_map import (
     exponential_map,
+    first_kind_map,
     frame_field,
     frame_jets_along,
     integrate,
@@ -69,6 +70,33 @@ def direct_exponential_map(ctx: _Context, degree: int) -> list[Poly]:
             cur = [b + integrate(v, l) for b, v in zip(base, vals, strict=True)]
         E = cur
     return E
+
+
+def direct_first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
+    """E_1(y) by Picard iteration in (y, tau) with one series of all frame fields per iterate."""
+    n, w = ctx.n, ctx.weights
+    nv, wt = n + 1, [*w, 0]
+    point = [Poly.constant(nv, to_symengine(v)) for v in ctx.p]
+    flat = [c for word in ctx.filtration.frame for c in word_field_symengine(ctx.sys, word)]
+    ys = [Poly.variable(nv, j) for j in range(n)]
+    cur = point
+    for it in range(1, degree + 1):
+        top = min(degree, it)
+        jets = weighted_jets(flat, ctx.xsyms, cur, wt, top - 1)
+        cur = [
+            point[k]
+            + integrate(
+                sum((ys[j].mul(jets[j * n + k], wt, top) for j in range(n)), Poly(nv)), n
+            )
+            for k in range(n)
+        ]
+    out = []
+    for poly in cur:
+        terms: dict = {}
+        for m, c in poly.terms.items():
+            terms[m[:n]] = terms[m[:n]] + c if m[:n] in terms else c
+        out.append(Poly(n, terms))
+    return out
 
 
 def same(a: list[Poly], b: list[Poly]) -> bool:
@@ -123,6 +151,13 @@ def test_exponential_map_equals_the_direct_construction(case):
     D = max(ctx.weights)
     assert same(exponential_map(ctx, D), direct_exponential_map(ctx, D))
     assert same(exponential_map(ctx, D - 1), direct_exponential_map(ctx, D - 1))
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_first_kind_map_equals_the_direct_construction(case):
+    ctx = context(case)
+    D = max(ctx.weights)
+    assert same(first_kind_map(ctx, D), direct_first_kind_map(ctx, D))
 
 
 def test_frame_fields_past_the_expansion_budget_give_the_same_coordinates(monkeypatch):

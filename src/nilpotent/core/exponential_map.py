@@ -100,35 +100,45 @@ def frame_field(ctx: _Context, word: Word) -> SeField:
     return field
 
 
-def frame_jets_along(ctx: _Context, l: int, cur: Sequence[Poly], degree: int) -> list[Poly]:
-    r"""Weighted jets of $Y_l(\varphi(s))$ to degree ``degree`` along $x = \varphi(s)$ (``cur``).
+def frame_jets_along(
+    ctx: _Context,
+    l: int,
+    cur: Sequence[Poly],
+    degree: int,
+    weights: Sequence[int] | None = None,
+) -> list[Poly]:
+    r"""Weighted jets of $Y_l(\varphi)$ to degree ``degree`` along the map $x = \varphi$ (``cur``).
 
-    Two steps instead of one series of $Y_l\circ\varphi$: the Taylor jet of
-    $Y_l(p + d)$ in $d = x - p$, where $d_k$ has the weight $\nu_k$ = the least
-    weighted degree (in $s$) of a term of $\varphi_k - p_k$ (capped at ``degree`` + 1),
-    truncated at $\nu$-degree ``degree`` (a monomial $d^\beta$ with
-    $\nu(\beta) >$ ``degree`` composes to terms of degree $>$ ``degree`` only); then that
-    polynomial composed with $d = \varphi(s) - p$, truncated.  The jet in $d$ is computed
-    once per weights $\nu$ and reused by every Picard iterate; degree 0 is the frame's
-    value at $p$ (from the filtration: the field is not needed).
+    ``cur`` are polynomials in variables of ``weights`` (default: the weights at
+    $p$), starting at $p$.  Two steps instead of one series of $Y_l\circ\varphi$:
+    the Taylor jet of $Y_l(p + d)$ in $d = x - p$, where $d_k$ has the weight
+    $\nu_k$ = the least weighted degree of a term of $\varphi_k - p_k$ (capped at
+    ``degree`` + 1), truncated at $\nu$-degree ``degree`` (a monomial $d^\beta$ with
+    $\nu(\beta) >$ ``degree`` composes to terms of degree $>$ ``degree`` only; the
+    coordinates with $\nu_k >$ ``degree`` are set to $p_k$ before the series); then
+    that polynomial composed with $d = \varphi - p$, truncated.  The jet in $d$ is
+    computed once per weights $\nu$ and reused by every Picard iterate; degree 0 is
+    the frame's value at $p$ (from the filtration: the field is not needed).  With
+    floats (``ctx.numeric``), or a $d_k$ with a term of weighted degree 0, one
+    series of the composite (the direct method).
     """
-    n, w = ctx.n, ctx.weights
-    d = [c - Poly.constant(n, to_symengine(p)) for c, p in zip(cur, ctx.p, strict=True)]
-    if ctx.numeric or any(dk.value_at_zero() != 0 for dk in d):
-        # floats: one series along the iterate, as computed before (same rounding); and a
-        # map that does not start at p (never built here) has no jet in d to reuse
+    n = ctx.n
+    w = ctx.weights if weights is None else weights
+    nv = cur[0].nvars
+    d = [c - Poly.constant(nv, to_symengine(p)) for c, p in zip(cur, ctx.p, strict=True)]
+    nu = tuple(min([weighted_degree(m, w) for m in dk.terms] + [degree + 1]) for dk in d)
+    if ctx.numeric or 0 in nu:
+        # floats: one series along the iterate, as computed before (same rounding); a
+        # d_k with a term of degree 0 (not from these builders) has no truncated jet in d
         Y = frame_field(ctx, ctx.filtration.frame[l])
         return weighted_jets(Y, ctx.xsyms, cur, w, degree, ctx.numeric)
     cache = ctx.__dict__.setdefault("cache", {})
     if degree == 0:
-        key0 = ("frame_value", l)
+        key0 = ("frame_value", l, nv)
         if key0 not in cache:
             values = [to_symengine(v) for v in ctx.filtration.frame_values[l]]
-            cache[key0] = [Poly.constant(n, v) for v in values]
+            cache[key0] = [Poly.constant(nv, v) for v in values]
         return cache[key0]
-    nu = tuple(
-        min([weighted_degree(m, w) for m in dk.terms] + [degree + 1]) for dk in d
-    )
     key = ("frame_jet", l, nu, degree)
     jet = cache.get(key)
     if jet is None:
@@ -163,19 +173,17 @@ def first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
     nv = n + 1
     wt = [*w, 0]
     point = [Poly.constant(nv, to_symengine(v)) for v in ctx.p]
-    frame = [frame_field(ctx, word) for word in ctx.filtration.frame]
-    flat = [c for f in frame for c in f]
     ys = [Poly.variable(nv, j) for j in range(n)]
     cur = point
     for it in range(1, degree + 1):
         # iterate ``it`` is exact to weighted degree ``it``: jets to ``it - 1`` suffice
         top = min(degree, it)
-        jets = weighted_jets(flat, ctx.xsyms, cur, wt, top - 1, ctx.numeric)
+        jets = [frame_jets_along(ctx, j, cur, top - 1, wt) for j in range(n)]
         new = []
         for k in range(n):
             acc = Poly(nv)
             for j in range(n):
-                comp = jets[j * n + k]
+                comp = jets[j][k]
                 if comp.terms:
                     acc = acc + ys[j].mul(comp, wt, top)
             new.append(point[k] + integrate(acc, n))
