@@ -391,10 +391,11 @@ class Poly:
                 special.append(sp.Mul(q, *factors))
                 continue
             factors.sort(key=_CANONICAL_ORDER)
-            if q == 1:
-                terms.append(factors[0] if len(factors) == 1 else sp.Mul._from_args(factors))
+            if q == 1 and len(factors) == 1:
+                terms.append(factors[0])
             else:
-                terms.append(sp.Mul._from_args([q, *factors]))
+                args = factors if q == 1 else [q, *factors]
+                terms.append(cast(sp.Expr, sp.Mul._from_args(args)))
         number: sp.Expr = sp.Integer(0)
         if special:
             rest = sp.Add(*special)
