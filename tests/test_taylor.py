@@ -132,3 +132,36 @@ def test_to_sympy_falls_back_for_irrational_coefficients_and_repeated_symbols():
     q = Poly(2, {(1, 0): se.Integer(1), (0, 1): se.Integer(1)})
     assert q._to_sympy_canonical([_X[0], _X[0]]) is None
     assert q.to_sympy([_X[0], _X[0]]) == 2 * _X[0]
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    a=_polys(),
+    b=_polys(),
+    weights=st.lists(st.integers(1, 3), min_size=4, max_size=4),
+    degree=st.one_of(st.none(), st.integers(0, 10)),
+)
+def test_truncated_product_and_composition_match_sympy(a, b, weights, degree):
+    """``mul``/``compose`` truncated: sympy's expanded result, terms of higher degree dropped."""
+
+    def truncated(e: sp.Expr) -> dict:
+        poly = sp.Poly(e, *_X)
+        return {
+            m: c
+            for m, c in poly.terms()
+            if c != 0
+            and (degree is None or sum(x * w for x, w in zip(m, weights, strict=True)) <= degree)
+        }
+
+    def as_dict(p: Poly) -> dict:
+        return {m: sp.S(c) for m, c in p.terms.items()}
+
+    ea, eb = a.to_sympy(_X), b.to_sympy(_X)
+    assert as_dict(a.mul(b, weights, degree)) == truncated(sp.expand(ea * eb))
+    # composition: a of total degree <= 2, arguments of at most 3 terms (sympy stays quick)
+    small_a = Poly(4, {m: c for m, c in a.terms.items() if sum(m) <= 2})
+    small_b = Poly(4, dict(list(b.terms.items())[:3]))
+    args = [small_b, Poly.variable(4, 1) + small_b, Poly.variable(4, 0), small_b]
+    arg_exprs = [p.to_sympy(_X) for p in args]
+    want = sp.expand(small_a.to_sympy(_X).xreplace(dict(zip(_X, arg_exprs, strict=True))))
+    assert as_dict(small_a.compose(args, weights, degree)) == truncated(want)
