@@ -195,3 +195,73 @@ def test_samples_at_start_and_end_take_the_lean_path_unchanged(snake):
     np.testing.assert_array_equal(lean.samples[:, 1], lean.final)
     assert np.abs(lean.final - general.samples[:, 2]).max() < 1e-12
     np.testing.assert_array_equal(general.samples[:, 2], general.final)
+
+
+def test_a_coordinate_the_inputs_cannot_move_is_held_not_integrated(snake):
+    # [X1, X2] bracket motions of the trident snake: X1 and X2 have 0 in the θ row (q2),
+    # so θ is frozen (a parameter); it is reported as its start value, exactly, in the end
+    # points and in every sample, and the other coordinates agree with the integrator that
+    # integrates all six (every parameter, nothing frozen) up to rounding
+    rng = np.random.default_rng(9)
+    x0 = rng.uniform(-0.1, 0.1, (21, 6))
+    x0[0, 2] = 3.0  # a heading beyond 1: the held value does not loosen the tolerance
+    sig = bracket_inputs(3, 1, 2, rng.uniform(0.01, 0.3, 21))
+    end = float(sig.total_durations.min())
+    sol = integrate(snake, x0, sig, engine="heyoka", times=[0.0, end / 3, end])
+    assert sol.all_ok
+    np.testing.assert_array_equal(sol.final[:, 2], x0[:, 2])
+    np.testing.assert_array_equal(sol.samples[:, :, 2], np.repeat(x0[:, 2:3], 3, axis=1))
+    tol = heyoka_engine.heyoka_tolerance(1e-10, 1e-12)
+    held = [v for k, v in snake._memo.items() if k[0] == "heyoka" and k[4]]
+    assert held and all(v.frozen == (2,) for v in held)
+    assert all(v.template.state.shape[0] == 5 for v in held)
+    full = heyoka_engine.taylor_integrator(snake, sig.harmonics, tol, None)
+    ta, bs = full.template, full.batch_size
+    pars = heyoka_engine._parameters(sig)
+    for lo in range(0, 21, bs):
+        hi = min(lo + bs, 21)
+        lanes = lo + np.arange(bs) % (hi - lo)
+        ta.state[:] = x0[lanes].T
+        ta.pars[:] = pars[lanes, 0].T
+        ta.set_time(np.zeros(bs))
+        ta.propagate_until(np.full(bs, end))
+        assert np.abs(sol.final[lo:hi] - ta.state[:, : hi - lo].T).max() < 1e-13
+
+
+def test_a_held_coordinate_beyond_the_bound_fails_as_when_integrated(snake):
+    # a start value that is not finite or beyond `bound` is not frozen: the trajectory is
+    # integrated in full and stopped (beyond the bound / non-finite) like any other, while
+    # the rows beside it are unaffected (bit-identical to a batch without it)
+    rng = np.random.default_rng(10)
+    x0 = rng.uniform(-0.1, 0.1, (12, 6))
+    amps = rng.uniform(0.01, 0.3, 12)
+    bad = x0.copy()
+    bad[3, 2] = 5e8
+    bad[7, 2] = np.nan
+    sol = integrate(snake, bad, bracket_inputs(3, 1, 2, amps), engine="heyoka", bound=1e8)
+    assert Status(int(sol.status[3])) == Status.BLOW_UP
+    assert Status(int(sol.status[7])) == Status.NON_FINITE
+    rest = [k for k in range(12) if k not in (3, 7)]
+    assert np.all(sol.status[rest] == Status.SUCCESS)
+    alone = integrate(snake, x0[rest], bracket_inputs(3, 1, 2, amps[rest]), engine="heyoka")
+    np.testing.assert_array_equal(sol.final[rest], alone.final)
+
+
+def test_the_integrator_reads_only_the_parameters_in_use(snake):
+    # [X1, X3] motions use ω, the sine amplitude of u1 and the cosine amplitude of u3: the
+    # compiled integrator has those three parameters (nothing else; X1 and X3 both move
+    # every coordinate, so nothing is frozen), in layout order
+    sig = bracket_inputs(3, 1, 3, np.array([0.1]))
+    integrate(snake, np.zeros((1, 6)), sig, engine="heyoka")
+    pars = heyoka_engine._parameters(sig)[0, 0]
+    used = tuple(int(p) for p in np.flatnonzero(pars))
+    integ = [v for k, v in snake._memo.items()
+             if k[0] == "heyoka" and k[3] is not None and v.slots == used]
+    assert integ and integ[0].frozen == () and integ[0].parameters == len(used)
+
+
+def test_default_thread_count_is_one_more_than_the_cores(monkeypatch):
+    monkeypatch.setattr(heyoka_engine, "default_threads", lambda: 2)
+    assert heyoka_engine.default_workers() == 3
+    monkeypatch.setattr(heyoka_engine, "default_threads", lambda: 1)
+    assert heyoka_engine.default_workers() == 1

@@ -172,8 +172,9 @@ def integrate(
         For ``fixed``: also integrate with ``steps/2`` to estimate the error.
     threads:
         Number of numba threads (default: numba's setting), or of threads
-        running heyoka's SIMD batches (default: every core this process may
-        use; the results do not depend on it).
+        running heyoka's SIMD batches (default: one more than the cores this
+        process may use, so that every core stays busy while a thread waits
+        for Python's GIL; the results do not depend on it).
 
     Raises
     ------
