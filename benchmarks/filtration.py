@@ -1,8 +1,9 @@
 """Benchmark of `nilpotent.core.filtration.analyze` against plain sympy brackets.
 
-Cases: ``car-trailers:K`` at the origin (regular, step K + 2) for K = 1..K_max,
-and at the configuration where every trailer is perpendicular to the one before
-(``theta_i = i*pi/2``; singular, step 3, 5, 8 for K = 1, 2, 3).
+Cases: ``car-trailers:K`` at the origin (regular, step K + 2) for K = 1..K_max
+(default 9), and at the configuration where every trailer is perpendicular to the
+one before (``theta_i = i*pi/2``; singular, step 3, 5, 8, 13 for K = 1, 2, 3, 4:
+the Fibonacci numbers of F. Jean 1996).
 
 * ``nilpotent``: :func:`analyze` on a fresh copy of the system (empty caches),
   everything included (generic growth vector at random points, exact ranks at
@@ -14,7 +15,7 @@ and at the configuration where every trailer is perpendicular to the one before
   Run in a subprocess and stopped after ``--timeout`` seconds (default 60);
   once a K times out, larger K are not run for that family.
 
-Usage: ``PYTHONPATH=src python benchmarks/filtration.py [--max-k 8] [--timeout 60]
+Usage: ``PYTHONPATH=src python benchmarks/filtration.py [--max-k 9] [--timeout 60]
 [--markdown]``.  Each line: case, family, step, regular, wall and CPU time of
 ``analyze``, wall time of the sympy baseline, ratio of wall times.
 """
@@ -98,12 +99,12 @@ def run_ours(k: int, family: str) -> tuple[int, float, float, bool]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--max-k", type=int, default=8)
+    parser.add_argument("--max-k", type=int, default=9)
     parser.add_argument("--timeout", type=float, default=60.0)
     parser.add_argument("--markdown", action="store_true")
     args = parser.parse_args()
     cases = [("origin", k) for k in range(1, args.max_k + 1)]
-    cases += [("perpendicular", k) for k in (1, 2, 3)]
+    cases += [("perpendicular", k) for k in (1, 2, 3, 4)]
     timed_out: set[str] = set()
     lines = []
     if args.markdown:

@@ -47,8 +47,18 @@ def _assert_in_box(cert, end: np.ndarray) -> None:
 
 
 def test_car_with_5_trailers_at_the_case_point_is_bracket_generating(run_cli):
+    # the full search at the point now ends (brackets as polynomials in atoms): the
+    # brackets span R^8 there, with a step within Jean's bound F_{K+3} = F_8 = 21
     status, out, err = run_cli(
         "analyze", "car-trailers:5", "--at", "theta0=pi,theta1=pi/2", "--json")
+    assert status == 0, err
+    j = json.loads(out)
+    assert j["bracket_generating"] is True and j["growth_vector"][-1] == 8
+    assert j["certified_by"] is None and j["step"] <= 21 and j["regular"] is False
+    # a search stopped short (--max-length 9) is completed through the orbit
+    status, out, err = run_cli(
+        "analyze", "car-trailers:5", "--at", "theta0=pi,theta1=pi/2", "--max-length", "9",
+        "--json")
     assert status == 0, err
     j = json.loads(out)
     assert j["bracket_generating"] is True
@@ -60,7 +70,8 @@ def test_car_with_5_trailers_at_the_case_point_is_bracket_generating(run_cli):
     assert j["growth_vector"][-1] < 8 and j["step"] == known
     assert j["weights"] == sorted(j["weights"]) and len(j["weights"]) == j["growth_vector"][-1]
     assert "known up to bracket length" in j["undetermined"]["reason"]
-    status, out, _ = run_cli("analyze", "car-trailers:5", "--at", "theta0=pi,theta1=pi/2")
+    status, out, _ = run_cli("analyze", "car-trailers:5", "--at", "theta0=pi,theta1=pi/2",
+                             "--max-length", "9")
     assert status == 0 and "orbit theorem" in out and "known up to bracket length" in out
 
 

@@ -13,10 +13,13 @@ How it is computed
    (fixed seed), confirmed at a second one.  A random point is regular with
    probability one, so near $q$ the words chosen up to length $s$ span
    $\\Delta^s$ as a module and $\\Delta^{s+1}(q)$ is spanned by them and the
-   brackets $[X_i, Y]$ with $Y$ a word chosen at length $s$.  A new word
-   $[u, v]$ is evaluated from the fields of $u$ and $v$ by forward-mode
-   directional derivatives (exact rationals, or arb balls), so the longest
-   fields are never expanded.
+   brackets $[X_i, Y]$ with $Y$ a word chosen at length $s$.  Words are
+   evaluated by :class:`~nilpotent.core.word_values.WordValues`: from their
+   fields as polynomials in the coordinates and elementary atoms
+   (:mod:`nilpotent.core.polynomial_fields`; exact rationals where the atoms
+   are rational, certified arb balls elsewhere), or, for fields outside those
+   atoms, from the symengine fields of their halves by forward-mode
+   directional derivatives.
 2. *At p* the Hall words of each length are scanned in order and kept when
    their value at $p$ is independent of those already kept (greedy, earliest
    first).  Since $n_s(p) \\le n_s(q)$, the scan of length $s$ stops as soon as
@@ -50,6 +53,13 @@ from nilpotent.core.brackets import (
     word_values_at,
 )
 from nilpotent.core.expressions import as_expr
+from nilpotent.core.hall_budget import (
+    HALL_WORD_BUDGET,
+    budget_length,
+    check_hall_budget,
+    default_max_length,
+    default_max_length_for_budget,
+)
 from nilpotent.core.orbit import ORBIT_TIME_BUDGET, OrbitCertificate, certify_by_orbit
 from nilpotent.core.spans import (
     START_PRECISION_BITS,
@@ -419,7 +429,7 @@ def analyze(
         check_hall_budget(m, max_length)
     limit = default_max_length(n, m) if automatic else int(max_length)  # type: ignore[arg-type]
     limit = max(limit, len(generic))
-    ceiling = max(limit, _budget_length(m)) if automatic else limit
+    ceiling = max(limit, budget_length(m)) if automatic else limit
     at = WordValues(sys, p, symbolic=True)
     span = Span()
     frame: list[Word] = []
@@ -543,7 +553,7 @@ def analyze(
             f"({growth_t[-1] if growth_t else 0} of {n} dimensions); bracket generation was "
             f"proved through the orbit instead ({undetermined.get('reason', '')})"
         )
-    frame_values = word_values_at(sys, frame, p) if frame else ()
+    frame_values = _frame_values(sys, at, frame, p)
     return Filtration(
         system=sys,
         point=p,
@@ -564,6 +574,16 @@ def analyze(
     )
 
 
+def _frame_values(
+    sys: ControlSystem, at: WordValues, frame: Sequence[Word], p: tuple[sp.Expr, ...]
+) -> tuple[tuple[sp.Expr, ...], ...]:
+    """Exact values of the frame words at ``p``: the rationals already computed, else symengine."""
+    exact = [at.exact_sympy(w) for w in frame]
+    if all(v is not None for v in exact):
+        return tuple(exact)  # type: ignore[arg-type]
+    return word_values_at(sys, frame, p)
+
+
 def _weights(growth: tuple[int, ...]) -> tuple[int, ...]:
     """$w_j = s$ for $n_{s-1} < j \\le n_s$."""
     return tuple(
@@ -571,87 +591,6 @@ def _weights(growth: tuple[int, ...]) -> tuple[int, ...]:
         for k, (before, after) in enumerate(zip((0, *growth), growth, strict=False), start=1)
         for _ in range(after - before)
     )
-
-
-def _budget_length(m: int) -> int:
-    """The longest length whose Hall words (all lengths up to it) fit :data:`HALL_WORD_BUDGET`."""
-    total, length = 0, 0
-    while True:
-        count = _witt(m, length + 1)
-        if total + count > HALL_WORD_BUDGET and length >= 2:
-            return length
-        total += count
-        length += 1
-
-
-HALL_WORD_BUDGET = 5000
-"""Most Hall words the default ``max_length`` lets :func:`analyze` examine at ``p``."""
-
-def default_max_length(n: int, m: int) -> int:
-    r"""The default longest bracket length examined at a point.
-
-    $\max(2n + 2, 12)$, lowered so that at most :data:`HALL_WORD_BUDGET` Hall
-    words (Witt's formula) of length $\le$ it exist for $m$ generators; it only
-    matters at singular points, where the span can stall and grow again later.
-    """
-    total = 0
-    length = 0
-    wanted = max(2 * n + 2, 12)
-    while length < wanted:
-        count = _witt(m, length + 1)
-        if total + count > HALL_WORD_BUDGET and length >= 2:
-            break
-        total += count
-        length += 1
-    return length
-
-
-def check_hall_budget(m: int, max_length: int) -> None:
-    """Refuse an explicit ``max_length`` whose Hall words exceed :data:`HALL_WORD_BUDGET`.
-
-    Raises
-    ------
-    ComputationLimitError
-        Naming the number of Hall words, the budget and the option (``--max-length``).
-    """
-    total = 0
-    for length in range(1, max_length + 1):
-        total += _witt(m, length)
-        if total > HALL_WORD_BUDGET:
-            raise ComputationLimitError(
-                f"--max-length {max_length} with {m} fields means more than "
-                f"{HALL_WORD_BUDGET:,} Hall words (the budget HALL_WORD_BUDGET; already "
-                f"{total:,} up to length {length}); give a --max-length of at most "
-                f"{default_max_length_for_budget(m)}"
-            )
-
-
-def default_max_length_for_budget(m: int) -> int:
-    """The longest bracket length whose Hall words fit in :data:`HALL_WORD_BUDGET`."""
-    total = length = 0
-    while True:
-        count = _witt(m, length + 1)
-        if total + count > HALL_WORD_BUDGET:
-            return max(length, 1)
-        total += count
-        length += 1
-
-
-def _witt(m: int, k: int) -> int:
-    """Dimension of the degree-k part of the free Lie algebra on m generators."""
-    return sum(_mobius(d) * m ** (k // d) for d in range(1, k + 1) if k % d == 0) // k
-
-
-def _mobius(k: int) -> int:
-    result, q = 1, 2
-    while q * q <= k:
-        if k % q == 0:
-            k //= q
-            if k % q == 0:
-                return 0
-            result = -result
-        q += 1
-    return -result if k > 1 else result
 
 
 def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> sp.Expr:
@@ -689,3 +628,16 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
 
     f = filtration if filtration is not None else analyze(sys)
     return singular_set(sys, f.generic_growth_vector).equation
+
+
+__all__ = [
+    "ANALYSIS_TIME_BUDGET",
+    "HALL_WORD_BUDGET",
+    "Filtration",
+    "analyze",
+    "check_hall_budget",
+    "default_max_length",
+    "default_max_length_for_budget",
+    "generic_growth_vector",
+    "singular_locus",
+]

@@ -33,7 +33,12 @@ A :class:`Span` built with ``probabilistic=True`` (the analysis at a random
 point) also calls *dependent* a vector whose normalised Gram determinant is
 still enclosed in a ball of radius below $2^{-3P/4}$ at the last precision
 $P$ tried: a nonzero value that small at a pseudo-random point has probability
-zero, like every other statement about random points.
+zero, like every other statement about random points.  Before raising the
+precision it tries the vectors' polynomial forms (:meth:`Vector.free`): when
+they are exactly dependent (``fmpq_mat``) at a pseudo-random integer point of
+$[2^{61}, 2^{62})^N$, the dependence is a polynomial identity with probability
+at least $1 - D/2^{61}$ ($D$ the degree of a minor, Schwartz-Zippel), hence
+holds at the random point too; else the balls go on as before.
 """
 
 from __future__ import annotations
@@ -120,6 +125,17 @@ class Vector(abc.ABC):
         """All entries as arb balls at ``prec`` bits."""
 
     def symbolic(self) -> dict[Key, sp.Expr] | None:
+        return None
+
+    def free(self) -> dict[Key, fmpq] | None:
+        """Exact values of the vector's polynomial form at a random free point, or None.
+
+        A vector given by polynomials in variables (coordinates and atoms,
+        :mod:`nilpotent.core.polynomial_fields`) evaluated at a pseudo-random
+        integer point where the variables are treated as independent: a
+        dependence found there is a polynomial identity (Schwartz-Zippel),
+        true at every point.  Used only by a probabilistic :class:`Span`.
+        """
         return None
 
 
@@ -234,6 +250,7 @@ class Span:
             return _exact_decision(exact_rows)  # type: ignore[arg-type]
         prec = START_PRECISION_BITS
         tried_algebraic = False
+        tried_free = False
         floor = None
         while True:
             self.precision_reached = max(self.precision_reached, prec)
@@ -245,6 +262,14 @@ class Span:
             if gram is not None and gram > 0:
                 return Decision.INDEPENDENT
             if self.probabilistic:
+                if not tried_free:
+                    tried_free = True
+                    free = [r.free() for r in rows]
+                    if all(f is not None for f in free) and (
+                        _exact_decision(free) is Decision.DEPENDENT  # type: ignore[arg-type]
+                    ):
+                        self.exact = False
+                        return Decision.DEPENDENT
                 if floor is None:
                     floor = _probabilistic_floor(balls, len(rows))
                 tiny = arb(2) ** (-(3 * prec) // 4)

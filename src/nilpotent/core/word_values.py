@@ -23,6 +23,8 @@ from nilpotent.core.brackets import (
     to_sympy,
     word_field_symengine,
 )
+from nilpotent.core.polynomial_fields import AtomUndefined, PolynomialFields, polynomial_fields
+from nilpotent.core.polynomial_values import PointValues
 from nilpotent.core.spans import (
     Evaluator,
     Inaccurate,
@@ -45,16 +47,22 @@ class Undefined(Exception):
 class WordValues:
     """Values of bracket words at one point, as :class:`~nilpotent.core.spans.Vector` objects.
 
-    A word whose field is built (cached on the system) is evaluated from its
-    field; a word $[u, v]$ whose field is not built is $Dv(q)u(q) - Du(q)v(q)$,
-    from directional derivatives of the fields of ``u`` and ``v`` (exact
-    rationals or arb balls, forward-mode), so the longest fields are never
-    expanded.  Exact rational values are used where the point and the fields
-    allow it; exact values in symengine's numbers (``cos(pi/2)`` is ``0``) are
-    computed the same way, only when a decision needs them (``symbolic``), and
-    abandoned when a value grows beyond a size budget.  With ``box`` (one arb
-    ball per coordinate), the balls enclose the values over the whole box
-    (interval arithmetic) and no exact value is computed.
+    When the fields have a polynomial form in the coordinates and elementary
+    atoms (:mod:`nilpotent.core.polynomial_fields`: every model built from the
+    grammar's polynomial, rational and elementary functions), exact rationals
+    and balls come from the word's polynomial field, built by FLINT; its value
+    is exact when the coordinates and the atoms are rational at the point
+    (``cos(0) = 1``), else a certified ball.  Otherwise (and always with
+    ``box``) a word whose field is built (cached on the system) is evaluated
+    from its field; a word $[u, v]$ whose field is not built is
+    $Dv(q)u(q) - Du(q)v(q)$, from directional derivatives of the fields of
+    ``u`` and ``v`` (exact rationals or arb balls, forward-mode), so the longest
+    fields are never expanded.  Exact values in symengine's numbers
+    (``cos(pi/2)`` is ``0``, ``sqrt(3)/2``) are computed from the symengine
+    fields, only when a decision needs them (``symbolic``), and abandoned when
+    a value grows beyond a size budget.  With ``box`` (one arb ball per
+    coordinate), the balls enclose the values over the whole box (interval
+    arithmetic) and no exact value is computed.
     """
 
     def __init__(
@@ -75,6 +83,9 @@ class WordValues:
         self._balls: dict[tuple[Word, int], list] = {}
         self._sym: dict[Word, tuple | None] = {}
         self._sym_se: dict[Word, list | None] = {}
+        self._free: dict[Word, list] = {}
+        self._poly: PolynomialFields | None = polynomial_fields(sys) if box is None else None
+        self._poly_at = PointValues(self._poly, self.point) if self._poly is not None else None
 
     def vector(self, word: Word) -> WordVector:
         return WordVector(self, word)
@@ -84,7 +95,12 @@ class WordValues:
         if word in self._exact:
             return self._exact[word]
         out = None
-        if self.rational_point is not None:
+        if self._poly is not None and self._poly_at is not None:
+            try:
+                out = self._poly_at.exact_field(self._poly.field(word))
+            except AtomUndefined as exc:
+                raise Undefined(str(exc)) from exc
+        elif self.rational_point is not None:
             env = dict(zip(self.coords, self.rational_point, strict=True))
             try:
                 out = self._eval(word, env, exact=True, sub=self.exact)
@@ -98,6 +114,13 @@ class WordValues:
         hit = self._balls.get(key)
         if hit is not None:
             return hit
+        if self._poly is not None and self._poly_at is not None:
+            try:
+                out = self._poly_at.ball_field(self._poly.field(word), prec)
+            except AtomUndefined as exc:
+                raise Undefined(str(exc)) from exc
+            self._balls[key] = out
+            return out
         old = flint.ctx.prec
         flint.ctx.prec = prec
         try:
@@ -111,6 +134,26 @@ class WordValues:
             flint.ctx.prec = old
         self._balls[key] = out
         return out
+
+    def free(self, word: Word) -> list | None:
+        """Exact values of the word's polynomial form at a pseudo-random free point, or None.
+
+        See :meth:`nilpotent.core.polynomial_fields.PolynomialFields.free_field`.
+        """
+        if self._poly is None:
+            return None
+        hit = self._free.get(word)
+        if hit is None:
+            hit = self._poly.free_field(self._poly.field(word))
+            self._free[word] = hit
+        return hit
+
+    def exact_sympy(self, word: Word) -> tuple[sp.Expr, ...] | None:
+        """The exact value as sympy rationals, or None when it is not known to be rational."""
+        vals = self.exact(word)
+        if vals is None:
+            return None
+        return tuple(sp.Rational(int(q.p), int(q.q)) for q in vals)
 
     def _eval(self, word: Word, env: dict, exact: bool, sub) -> list:
         try:
@@ -183,6 +226,12 @@ class WordVector(Vector):
 
     def balls(self, prec: int):
         return {k: v for k, v in enumerate(self.at.balls(self.word, prec)) if not v.is_zero()}
+
+    def free(self):
+        vals = self.at.free(self.word)
+        if vals is None:
+            return None
+        return {k: v for k, v in enumerate(vals) if v != 0}
 
     def symbolic(self):
         vals = self.at.symbolic(self.word)
