@@ -283,7 +283,7 @@ def _bracket_se(X, Y, ys):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("k", [7, 8])
-def test_car_trailers_approximation_properties(k, monkeypatch):
+def test_car_trailers_approximation_properties(k):
     """Issue 13's largest approximations (speed: ``benchmarks/approximation.py``), by properties.
 
     Checked independently of the certificate: each field of the approximation is
@@ -293,11 +293,6 @@ def test_car_trailers_approximation_properties(k, monkeypatch):
     of the system at the origin (Jean 1996), length by length (a bracket of length L
     has at 0 components only where w_j = L, so no more is possible).
     """
-    import nilpotent.core.brackets as brackets
-
-    # the analysis of main expands the longest frame brackets (at most a few thousand
-    # terms here) but bounds them by a product estimate that refuses K = 8
-    monkeypatch.setattr(brackets, "EXPANSION_TERMS_BUDGET", 10**9)
     a = approximate(get_model(f"car-trailers:{k}"))
     n, w = k + 3, a.weights
     assert a.filtration.growth_vector == tuple(range(2, k + 4))
