@@ -8,6 +8,7 @@ import dataclasses
 
 import hypothesis.strategies as st
 import pytest
+import symengine as se
 import sympy as sp
 from hypothesis import HealthCheck, given, settings
 
@@ -267,3 +268,60 @@ def test_long_trailer_chains_are_certified(name):
     """Issue 3's largest cases (their speed targets: ``benchmarks/approximation.py``)."""
     a = approximate(get_model(name))
     assert a.certificate.ok and a.certificate.nilpotent_step == int(name[-1]) + 2
+
+
+def _bracket_se(X, Y, ys):
+    """[X, Y] = DY·X − DX·Y for symengine polynomial fields (an independent evaluation)."""
+    return tuple(
+        se.expand(
+            sum((xk * yj.diff(v) for xk, v in zip(X, ys, strict=True)), se.Integer(0))
+            - sum((yk * xj.diff(v) for yk, v in zip(Y, ys, strict=True)), se.Integer(0))
+        )
+        for xj, yj in zip(X, Y, strict=True)
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k", [7, 8])
+def test_car_trailers_approximation_properties(k):
+    """Issue 13's largest approximations (speed: ``benchmarks/approximation.py``), by properties.
+
+    Checked independently of the certificate: each field of the approximation is
+    homogeneous of degree −1 under the dilations (so every bracket of length L is
+    homogeneous of degree −L, and vanishes for L > max w: nilpotent of step ≤ r),
+    and the brackets of the frame words at 0 reach the growth vector (2, 3, ..., K + 3)
+    of the system at the origin (Jean 1996), length by length (a bracket of length L
+    has at 0 components only where w_j = L, so no more is possible).
+    """
+    a = approximate(get_model(f"car-trailers:{k}"))
+    n, w = k + 3, a.weights
+    assert a.filtration.growth_vector == tuple(range(2, k + 4))
+    assert w == (1, 1, *range(2, k + 3))
+    ys = [se.Symbol(str(s)) for s in a.names]
+    lam = se.Symbol("lam")
+    dil = {y: lam**wj * y for y, wj in zip(ys, w, strict=True)}
+    fields = [tuple(se.S(c) for c in f) for f in a.fields]
+    for f in fields:
+        for c, wj in zip(f, w, strict=True):
+            assert se.expand(c.xreplace(dil) - lam ** (wj - 1) * c) == 0
+    memo: dict = {}
+
+    def field(word):
+        if word not in memo:
+            memo[word] = (
+                fields[word - 1]
+                if isinstance(word, int)
+                else _bracket_se(field(word[0]), field(word[1]), ys)
+            )
+        return memo[word]
+
+    zero = {y: 0 for y in ys}
+    values = [[sp.S(c.xreplace(zero)) for c in field(word)] for word in a.filtration.frame]
+    for length in range(1, max(w) + 1):
+        rows = [v for v, wj in zip(values, w, strict=True) if wj <= length]
+        assert sp.Matrix(rows).rank() == sum(1 for wj in w if wj <= length)
+    cert = a.certificate
+    assert cert.ok and cert.nilpotent_step == k + 2 and cert.growth_vector_at_0 == tuple(
+        range(2, k + 4)
+    )
+    assert len(a.fields_x) == 2 and all(len(f) == n for f in a.fields_x)

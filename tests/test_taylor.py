@@ -83,3 +83,85 @@ def test_not_smooth():
     a = se.Symbol("a")
     with pytest.raises(PointError, match="not smooth"):
         weighted_jets([se.sqrt(a)], [a], [Poly.variable(1, 0)], [1], 2)
+
+
+# --- sympy form of a polynomial: direct canonical construction vs sympy's constructors ----
+
+_X = sp.symbols("x0:4")
+_SHIFTS = (0, sp.Rational(1, 3), -2, sp.pi / 2, sp.sqrt(2))
+
+
+def _through_constructors(p: Poly, symbols) -> sp.Expr:
+    """The second method: the whole sum built in symengine, converted by sympy's constructors."""
+    ses = [se.S(x) for x in symbols]
+    total = se.Add(
+        *[se.Mul(c, *[x**a for x, a in zip(ses, m, strict=True) if a]) for m, c in p.terms.items()]
+    )
+    return sp.S(total)
+
+
+@st.composite
+def _polys(draw):
+    n = 4
+    monos = draw(
+        st.lists(st.tuples(*[st.integers(0, 3)] * n), min_size=0, max_size=12, unique=True)
+    )
+    coeffs = st.one_of(
+        st.integers(-5, 5).map(se.Integer),
+        st.tuples(st.integers(-7, 7), st.integers(1, 6)).map(lambda t: se.Rational(*t)),
+    )
+    return Poly(n, {m: draw(coeffs) for m in monos})
+
+
+@settings(max_examples=300, deadline=None)
+@given(p=_polys(), shifts=st.lists(st.sampled_from(_SHIFTS), min_size=4, max_size=4))
+def test_to_sympy_builds_the_expression_sympy_builds(p, shifts):
+    """Same tree (arguments in the same order: same printed text) as sympy's constructors."""
+    symbols = [x - c if c != 0 else x for x, c in zip(_X, shifts, strict=True)]
+    got = p.to_sympy(symbols)
+    want = _through_constructors(p, symbols)
+    assert sp.srepr(got) == sp.srepr(want)
+    assert str(got) == str(want)
+    assert sp.expand(got - want) == 0
+
+
+def test_to_sympy_falls_back_for_irrational_coefficients_and_repeated_symbols():
+    p = Poly(2, {(1, 0): se.sqrt(2) / 2, (0, 2): se.Integer(3), (0, 0): se.Integer(1)})
+    assert p._to_sympy_canonical(_X[:2]) is None
+    assert sp.srepr(p.to_sympy(_X[:2])) == sp.srepr(_through_constructors(p, _X[:2]))
+    q = Poly(2, {(1, 0): se.Integer(1), (0, 1): se.Integer(1)})
+    assert q._to_sympy_canonical([_X[0], _X[0]]) is None
+    assert q.to_sympy([_X[0], _X[0]]) == 2 * _X[0]
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    a=_polys(),
+    b=_polys(),
+    weights=st.lists(st.integers(1, 3), min_size=4, max_size=4),
+    degree=st.one_of(st.none(), st.integers(0, 10)),
+)
+def test_truncated_product_and_composition_match_sympy(a, b, weights, degree):
+    """``mul``/``compose`` truncated: sympy's expanded result, terms of higher degree dropped."""
+
+    def truncated(e: sp.Expr) -> dict:
+        poly = sp.Poly(e, *_X)
+        return {
+            m: c
+            for m, c in poly.terms()
+            if c != 0
+            and (degree is None or sum(x * w for x, w in zip(m, weights, strict=True)) <= degree)
+        }
+
+    def as_dict(p: Poly) -> dict:
+        return {m: sp.S(c) for m, c in p.terms.items()}
+
+    ea, eb = a.to_sympy(_X), b.to_sympy(_X)
+    assert as_dict(a.mul(b, weights, degree)) == truncated(sp.expand(ea * eb))
+    # composition: a of total degree <= 2, arguments of at most 3 terms (sympy stays quick)
+    small_a = Poly(4, {m: c for m, c in a.terms.items() if sum(m) <= 2})
+    small_b = Poly(4, dict(list(b.terms.items())[:3]))
+    args = [small_b, Poly.variable(4, 1) + small_b, Poly.variable(4, 0), small_b]
+    arg_exprs = [p.to_sympy(_X) for p in args]
+    want = sp.expand(small_a.to_sympy(_X).xreplace(dict(zip(_X, arg_exprs, strict=True))))
+    assert as_dict(small_a.compose(args, weights, degree)) == truncated(want)

@@ -21,8 +21,9 @@ from typing import TYPE_CHECKING
 
 import symengine as se
 
-from nilpotent.core.brackets import word_field_symengine
+from nilpotent.core.brackets import SeField, Word, word_field_symengine
 from nilpotent.core.taylor import Poly, to_symengine, weighted_degree, weighted_jets
+from nilpotent.errors import ComputationLimitError
 
 if TYPE_CHECKING:
     from nilpotent.core.privileged import Built, _Context
@@ -44,7 +45,8 @@ def exponential_map(ctx: _Context, degree: int) -> list[Poly]:
 
     Each flow by Picard iteration $x \leftarrow E_{l-1} + \int_0^{s_l} Y_l(x)$ on
     weighted jets (the integral raises the weighted degree by $w_l$, so a fixed
-    number of iterations is exact to ``degree``).
+    number of iterations is exact to ``degree``); the jets of $Y_l$ along an
+    iterate by :func:`frame_jets_along`.
     """
     n, w = ctx.n, ctx.weights
     key = ("exponential_map", degree)
@@ -52,21 +54,106 @@ def exponential_map(ctx: _Context, degree: int) -> list[Poly]:
     if key in cache:
         return cache[key]
     E = [Poly.constant(n, to_symengine(v)) for v in ctx.p]
-    for l, word in enumerate(ctx.filtration.frame):
-        wl = w[l]
+    for l, wl in enumerate(w):
         if wl > degree:
             continue
-        Y = word_field_symengine(ctx.sys, word)
         base = E
         cur = base
         # The error of the k-th iterate has weighted order >= (k + 1) w_l (the integral
         # adds w_l), so ceil((degree + 1) / w_l) - 1 iterations are exact to ``degree``.
         for _ in range(-(-(degree + 1) // wl) - 1):
-            vals = weighted_jets(Y, ctx.xsyms, cur, w, degree - wl, ctx.numeric)
+            vals = frame_jets_along(ctx, l, cur, degree - wl)
             cur = [b + integrate(v, l) for b, v in zip(base, vals, strict=True)]
         E = cur
     cache[key] = E
     return E
+
+
+def frame_field(ctx: _Context, word: Word) -> SeField:
+    r"""The field of a frame word in symengine: expanded, or else the bracket of its halves.
+
+    The expanded field (:func:`~nilpotent.core.brackets.word_field_symengine`, cached on
+    the system) where its size is within
+    :data:`~nilpotent.core.brackets.EXPANSION_TERMS_BUDGET`; past it, $[u, v] =
+    Dv\cdot u - Du\cdot v$ written with the fields of $u$ and $v$ and left unexpanded
+    (only low-order jets of the longest words are ever taken, and the series of the
+    unexpanded form never builds the expansion).  Cached on ``ctx``.
+    """
+    cache = ctx.__dict__.setdefault("cache", {})
+    key = ("frame_field", word)
+    if key in cache:
+        return cache[key]
+    try:
+        field = word_field_symengine(ctx.sys, word)
+    except ComputationLimitError:
+        if isinstance(word, int):
+            raise
+        u, v = frame_field(ctx, word[0]), frame_field(ctx, word[1])
+        field = tuple(
+            se.Add(
+                *[uk * vj.diff(x) for uk, x in zip(u, ctx.xsyms, strict=True) if uk != 0],
+                *[-vk * uj.diff(x) for vk, x in zip(v, ctx.xsyms, strict=True) if vk != 0],
+            )
+            for uj, vj in zip(u, v, strict=True)
+        )
+    cache[key] = field
+    return field
+
+
+def frame_jets_along(
+    ctx: _Context,
+    l: int,
+    cur: Sequence[Poly],
+    degree: int,
+    weights: Sequence[int] | None = None,
+) -> list[Poly]:
+    r"""Weighted jets of $Y_l(\varphi)$ to degree ``degree`` along the map $x = \varphi$ (``cur``).
+
+    ``cur`` are polynomials in variables of ``weights`` (default: the weights at
+    $p$), starting at $p$.  Two steps instead of one series of $Y_l\circ\varphi$:
+    the Taylor jet of $Y_l(p + d)$ in $d = x - p$, where $d_k$ has the weight
+    $\nu_k$ = the least weighted degree of a term of $\varphi_k - p_k$ (capped at
+    ``degree`` + 1), truncated at $\nu$-degree ``degree`` (a monomial $d^\beta$ with
+    $\nu(\beta) >$ ``degree`` composes to terms of degree $>$ ``degree`` only; the
+    coordinates with $\nu_k >$ ``degree`` are set to $p_k$ before the series); then
+    that polynomial composed with $d = \varphi - p$, truncated.  The jet in $d$ is
+    computed once per weights $\nu$ and reused by every Picard iterate; degree 0 is
+    the frame's value at $p$ (from the filtration: the field is not needed).  With
+    floats (``ctx.numeric``), or a $d_k$ with a term of weighted degree 0, one
+    series of the composite (the direct method).
+    """
+    n = ctx.n
+    w = ctx.weights if weights is None else weights
+    nv = cur[0].nvars
+    d = [c - Poly.constant(nv, to_symengine(p)) for c, p in zip(cur, ctx.p, strict=True)]
+    nu = tuple(min([weighted_degree(m, w) for m in dk.terms] + [degree + 1]) for dk in d)
+    if ctx.numeric or 0 in nu:
+        # floats: one series along the iterate, as computed before (same rounding); a
+        # d_k with a term of degree 0 (not from these builders) has no truncated jet in d
+        Y = frame_field(ctx, ctx.filtration.frame[l])
+        return weighted_jets(Y, ctx.xsyms, cur, w, degree, ctx.numeric)
+    cache = ctx.__dict__.setdefault("cache", {})
+    if degree == 0:
+        key0 = ("frame_value", l, nv)
+        if key0 not in cache:
+            values = [to_symengine(v) for v in ctx.filtration.frame_values[l]]
+            cache[key0] = [Poly.constant(nv, v) for v in values]
+        return cache[key0]
+    key = ("frame_jet", l, nu, degree)
+    jet = cache.get(key)
+    if jet is None:
+        Y = frame_field(ctx, ctx.filtration.frame[l])
+        # x_k = p_k + d_k; where d_k cannot reach the degree (nu_k > degree), x_k = p_k:
+        # the expression collapses before its series (cos(0) = 1, ...)
+        shifted = [
+            Poly.constant(n, to_symengine(p)) + Poly.variable(n, k)
+            if nu[k] <= degree
+            else Poly.constant(n, to_symengine(p))
+            for k, p in enumerate(ctx.p)
+        ]
+        jet = weighted_jets(Y, ctx.xsyms, shifted, nu, degree, ctx.numeric)
+        cache[key] = jet
+    return [c.compose(d, w, degree) for c in jet]
 
 
 def exponential_grading(weights: Sequence[int], chi: Sequence[Poly]) -> list[int]:
@@ -86,19 +173,17 @@ def first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
     nv = n + 1
     wt = [*w, 0]
     point = [Poly.constant(nv, to_symengine(v)) for v in ctx.p]
-    frame = [word_field_symengine(ctx.sys, word) for word in ctx.filtration.frame]
-    flat = [c for f in frame for c in f]
     ys = [Poly.variable(nv, j) for j in range(n)]
     cur = point
     for it in range(1, degree + 1):
         # iterate ``it`` is exact to weighted degree ``it``: jets to ``it - 1`` suffice
         top = min(degree, it)
-        jets = weighted_jets(flat, ctx.xsyms, cur, wt, top - 1, ctx.numeric)
+        jets = [frame_jets_along(ctx, j, cur, top - 1, wt) for j in range(n)]
         new = []
         for k in range(n):
             acc = Poly(nv)
             for j in range(n):
-                comp = jets[j * n + k]
+                comp = jets[j][k]
                 if comp.terms:
                     acc = acc + ys[j].mul(comp, wt, top)
             new.append(point[k] + integrate(acc, n))

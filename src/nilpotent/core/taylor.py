@@ -29,6 +29,7 @@ Zero tests
 
 from __future__ import annotations
 
+import functools
 import operator
 from collections.abc import Iterable, Mapping, Sequence
 from typing import cast
@@ -40,6 +41,9 @@ from nilpotent.core.spans import is_zero, to_double
 from nilpotent.errors import PointError
 
 Monomial = tuple[int, ...]
+
+_CANONICAL_ORDER = functools.cmp_to_key(sp.Basic.compare)
+"""The order in which sympy's ``Add`` and ``Mul`` keep their arguments."""
 
 __all__ = [
     "Monomial",
@@ -60,7 +64,7 @@ def to_symengine(expr: object) -> se.Basic:
 
 def weighted_degree(mono: Monomial, weights: Sequence[int]) -> int:
     r"""The weighted degree $\sum_k w_k \alpha_k$ of the monomial $y^\alpha$."""
-    return sum(a * w for a, w in zip(mono, weights, strict=True) if a)
+    return sum(map(operator.mul, mono, weights))
 
 
 def _clean(c: se.Basic) -> se.Basic:
@@ -252,23 +256,35 @@ class Poly:
         weighted degree and the scan stops at the first pair beyond ``degree``.
         """
         terms: dict[Monomial, se.Basic] = {}
+        get = terms.get
+        add = operator.add
         if degree is None:
-            pairs_b = [(0, mb, cb) for mb, cb in other.terms.items()]
-            items_a = [(0, ma, ca) for ma, ca in self.terms.items()]
-        else:
-            assert weights is not None
-            items_a = [(weighted_degree(m, weights), m, c) for m, c in self.terms.items()]
-            pairs_b = sorted(
-                ((weighted_degree(m, weights), m, c) for m, c in other.terms.items()),
-                key=lambda t: t[0],
-            )
-        for da, ma, ca in items_a:
+            for ma, ca in self.terms.items():
+                for mb, cb in other.terms.items():
+                    m = tuple(map(add, ma, mb))
+                    v = ca * cb
+                    old = get(m)
+                    terms[m] = v if old is None else old + v
+            return Poly(self.nvars, terms)
+        assert weights is not None
+        pairs_b = sorted(
+            ((weighted_degree(m, weights), m, c) for m, c in other.terms.items()),
+            key=operator.itemgetter(0),
+        )
+        if not pairs_b:
+            return Poly(self.nvars)
+        lowest = pairs_b[0][0]
+        for ma, ca in self.terms.items():
+            room = degree - weighted_degree(ma, weights)
+            if room < lowest:
+                continue
             for db, mb, cb in pairs_b:
-                if degree is not None and da + db > degree:
+                if db > room:
                     break
-                m = tuple(map(operator.add, ma, mb))
+                m = tuple(map(add, ma, mb))
                 v = ca * cb
-                terms[m] = terms[m] + v if m in terms else v
+                old = get(m)
+                terms[m] = v if old is None else old + v
         return Poly(self.nvars, terms)
 
     def diff(self, k: int) -> Poly:
@@ -326,6 +342,75 @@ class Poly:
             out.append(se.Mul(*f))
         return se.Add(*out) if out else se.Integer(0)
 
+    def _to_sympy_canonical(self, symbols: Sequence[sp.Expr]) -> sp.Expr | None:
+        """The sympy expression built directly in sympy's canonical form, or ``None``.
+
+        Applies to rational coefficients and variables that are distinct symbols or
+        shifted symbols ``x - c`` (``c`` a number).  A term ``q * prod(v_k**a_k)`` is
+        ``Mul(q, *powers)`` with the factors in sympy's canonical order
+        (:meth:`sympy.Basic.compare`, by which ``Mul`` and ``Add`` sort their
+        arguments); the few terms sympy rewrites (a number times one shifted variable,
+        which ``Mul`` distributes, and the constant) go through sympy's constructors;
+        the sum is their union in canonical order, the number first, as ``Add``
+        builds it (the other terms are distinct monomials: nothing to collect), without
+        the constructors' checks and flattening on every term (seconds on thousands
+        of terms).  Elsewhere ``None``: the constructors decide.
+        """
+        bases: list[sp.Symbol] = []
+        for x in symbols:
+            if isinstance(x, sp.Symbol):
+                bases.append(x)
+                continue
+            if not isinstance(x, sp.Add):
+                return None
+            syms = [a for a in x.args if isinstance(a, sp.Symbol)]
+            if len(syms) != 1 or not all(a.is_number for a in x.args if a is not syms[0]):
+                return None
+            bases.append(syms[0])
+        if len(set(bases)) != len(bases):
+            return None
+        powers: dict[tuple[int, int], sp.Expr] = {}
+        special: list[sp.Expr] = []
+        terms: list[sp.Expr] = []
+        for m, c in self.terms.items():
+            if isinstance(c, se.Integer):
+                q: sp.Expr = sp.Integer(int(c))
+            elif isinstance(c, se.Rational):
+                num, den = c.get_num_den()
+                q = sp.Rational(int(num), int(den))
+            else:
+                return None
+            factors: list[sp.Expr] = []
+            for k, a in enumerate(m):
+                if a:
+                    pw = powers.get((k, a))
+                    if pw is None:
+                        pw = powers[(k, a)] = symbols[k] if a == 1 else sp.Pow(symbols[k], a)
+                    factors.append(pw)
+            if not factors or (len(factors) == 1 and isinstance(factors[0], sp.Add)):
+                special.append(sp.Mul(q, *factors))
+                continue
+            factors.sort(key=_CANONICAL_ORDER)
+            if q == 1 and len(factors) == 1:
+                terms.append(factors[0])
+            else:
+                args = factors if q == 1 else [q, *factors]
+                terms.append(cast(sp.Expr, sp.Mul._from_args(args)))
+        number: sp.Expr = sp.Integer(0)
+        if special:
+            rest = sp.Add(*special)
+            for a in sp.Add.make_args(rest):
+                if a.is_Number:
+                    number = a
+                elif a != 0:
+                    terms.append(a)
+        terms.sort(key=_CANONICAL_ORDER)
+        if number != 0:
+            terms.insert(0, number)
+        if not terms:
+            return sp.Integer(0)
+        return terms[0] if len(terms) == 1 else cast(sp.Expr, sp.Add._from_args(terms))
+
     def to_sympy(self, symbols: Sequence[sp.Expr], *, keep_factors: bool = False) -> sp.Expr:
         """The polynomial as a sympy expression in ``symbols`` (symbols or expressions).
 
@@ -333,6 +418,9 @@ class Poly:
         not distributed over a factor such as ``(x - 1/3)`` (which would round ``1/3``).
         """
         if not keep_factors:
+            direct = self._to_sympy_canonical(symbols)
+            if direct is not None:
+                return direct
             # built by symengine (fast on thousands of terms), converted once
             ses = [se.S(x) for x in symbols]
             total = se.Add(
