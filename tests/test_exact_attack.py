@@ -60,3 +60,23 @@ def test_complex_field_value_is_refused(tmp_path, field):
     """
     d = _analyze(tmp_path, body, "--at", "x=-1")
     assert d["error"]["kind"] == "point"
+
+
+def test_undetermined_at_random_points_is_no_rank_deficit(monkeypatch):
+    # Heisenberg is bracket generating (2, 3).  If no decision at the random points can be made
+    # for [X1, X2], the analysis must not report growth (2) / "not bracket generating".
+    from nilpotent.core import filtration
+    from nilpotent.core.spans import Decision, Span
+    from nilpotent.errors import PointError
+    from nilpotent.models import get_model
+
+    real = Span.decide
+
+    def decide(self, v):
+        if self.probabilistic and self.rank >= 2:
+            return Decision.UNDETERMINED
+        return real(self, v)
+
+    monkeypatch.setattr(Span, "decide", decide)
+    with pytest.raises(PointError):
+        filtration.generic_growth_vector(get_model("heisenberg"))
