@@ -227,3 +227,23 @@ def test_an_empty_batch_gives_an_empty_solution(engine, method):
                     engine=engine, method=method, times=[0.0, 1.0])
     assert sol.final.shape == (0, 6) and sol.samples.shape == (0, 2, 6)
     assert sol.status.shape == sol.steps.shape == (0,) and sol.all_ok
+
+
+@pytest.mark.parametrize(("engine", "method"), [("numba", "adaptive"), ("numba", "fixed"),
+                                                ("heyoka", "adaptive"), ("scipy", "adaptive"),
+                                                ("numpy", "fixed")])
+def test_a_sample_time_a_rounding_past_the_end_is_the_end(engine, method):
+    # a time within the allowed 1e-12 slack past the duration (e.g. a sum of segment
+    # durations rounded up) is the end: its sample is the end point on every engine (NaN
+    # on some engines before), and the reported time is the duration
+    from nilpotent.numeric.engines import ENGINES
+
+    if not ENGINES[engine].available():
+        pytest.skip(f"{engine} not installed")
+    cs = compile_system(get_model("trident-snake"))
+    sig = bracket_inputs(3, 1, 2, np.full(3, 0.1))
+    end = float(sig.total_durations.min())
+    sol = integrate(cs, np.zeros((3, 6)), sig, engine=engine, method=method,
+                    times=[0.0, end * (1 + 5e-13)])
+    assert sol.all_ok and sol.times[-1] == end
+    np.testing.assert_array_equal(sol.samples[:, -1], sol.final)

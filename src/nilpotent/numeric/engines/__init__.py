@@ -159,6 +159,8 @@ def check_times(times: Any, total: np.ndarray) -> np.ndarray:
     """``times`` as a sorted ``(T,)`` float array within ``[0, min(total)]``; ``None``: none.
 
     ``total`` ``(B,)`` the trajectories' durations; with ``B = 0`` only ``>= 0`` is checked.
+    A time past ``min(total)`` by at most a relative 1e-12 (rounding in the
+    caller's sum of durations) is read as ``min(total)``, on every engine.
     """
     if times is None:
         return np.zeros(0)
@@ -171,6 +173,8 @@ def check_times(times: Any, total: np.ndarray) -> np.ndarray:
         raise OptionError(
             f"sample times must lie in [0, {float(np.min(total))}] (the input's duration)"
         )
+    if ts.size and total.size:  # within the 1e-12 slack past the end: the end itself
+        ts = np.minimum(ts, float(np.min(total)))
     return ts
 
 
