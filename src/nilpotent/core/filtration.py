@@ -264,12 +264,7 @@ def _generic_growth_at(
     chosen: list[Word] = []
 
     def add(w: Word) -> bool:
-        decision = span.add(at.vector(w))
-        if decision is Decision.UNDETERMINED:
-            # no ball and no identity decided it (values lost at every precision): this
-            # random point says nothing, rather than a rank too low ("not bracket generating")
-            raise Undefined(f"the rank decision for {format_word(w)} at a random point")
-        if decision is Decision.INDEPENDENT:
+        if span.add(at.vector(w)) is Decision.INDEPENDENT:
             chosen.append(w)
             return True
         return False
