@@ -228,6 +228,10 @@ class Evaluator:
             if self.exact:
                 raise NotRational
             xv, xd = self.dual(ex)
+            if bv < 0:
+                # a non-integer power of a negative number is complex (principal branch,
+                # as sympy and symengine read it): no real value, not a loss of accuracy
+                raise NotEvaluable(f"complex value {e} (a non-integer power of a negative number)")
             if isinstance(ex, se.Rational) and int(ex.get_num_den()[1]) == 2:
                 root = _check(bv.sqrt())
                 v = root ** int(ex.get_num_den()[0])
@@ -259,6 +263,8 @@ class Evaluator:
         if fn is None or len(e.args) != 1:
             raise NotEvaluable(f"cannot evaluate {func.__name__}")
         av, ad = self.dual(e.args[0])
+        if func is se.log and av < 0:
+            raise NotEvaluable(f"complex value {e} (log of a negative number)")
         v = _check(fn(av))
         d = _check(_deriv(func, av) * ad) if ad != 0 else arb(0)
         return v, d
