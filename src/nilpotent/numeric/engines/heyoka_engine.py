@@ -485,16 +485,15 @@ def _run_group(
     info = np.zeros((batch, 4))
     info[:, 3] = np.nan
     full = batch // bs
-    # the SIMD batches from the first one that is not full (all of them off the lean path)
-    first = full if lean_path(segs, full, ends, ts) else 0
-    chunks = [(c, min(c + bs, batch)) for c in range(first * bs, batch, bs)]
-    hy = _heyoka()
-    outcomes = (hy.taylor_outcome.time_limit, hy.taylor_outcome.step_limit)
-
-    # sample times at the start (0) or at every trajectory's end need no stop on the way
+    # the lean loop: one segment, a full SIMD batch, and sample times only at the start (0)
+    # or at every trajectory's end (no stop on the way)
     at_start = ts == 0.0
     at_end = np.all(ends[:, -1:] == ts[None, :], axis=0) & ~at_start
-    lean = first > 0
+    lean = segs == 1 and full > 0 and bool(np.all(at_start | at_end))
+    # the SIMD batches from the first one that is not full (all of them off the lean path)
+    chunks = [(c, min(c + bs, batch)) for c in range(full * bs if lean else 0, batch, bs)]
+    hy = _heyoka()
+    outcomes = (hy.taylor_outcome.time_limit, hy.taylor_outcome.step_limit)
     jobs: list[tuple[int, int]] = chunks
     # the lean loop's arrays, one contiguous (n, bs) block per full SIMD batch (empty when
     # it does not run); one common end time is passed as a number
@@ -583,14 +582,3 @@ def _run_group(
     if jobs:  # failed batches and the last, partial one: the general path
         run_general()
     return final, samples, info
-
-
-def lean_path(segs: int, full: int, ends: np.ndarray, ts: np.ndarray) -> bool:
-    """Whether the full SIMD batches take the lean loop of :func:`_run_group`.
-
-    One segment, at least one full batch, and sample times only at 0 or at
-    every trajectory's end (``ends`` ``(B, S)``, ``ts`` ``(T,)``).
-    """
-    at_start = ts == 0.0
-    at_end = np.all(ends[:, -1:] == ts[None, :], axis=0) & ~at_start
-    return segs == 1 and full > 0 and bool(np.all(at_start | at_end))
