@@ -143,7 +143,11 @@ API_SUPPORTING: dict[str, tuple[str, ...]] = {
         "nilpotent.viz.simulation.plot_scaling_study",
     ),
     "sweeps": ("nilpotent.viz.simulation.plot_sweep",),
-    "planning": ("nilpotent.planning.nilpotent.METHODS", "nilpotent.viz.plan.plot_plan"),
+    "planning": (
+        "nilpotent.planning.nilpotent.METHODS",
+        "nilpotent.planning.world.builtin_worlds",
+        "nilpotent.viz.plan.plot_plan",
+    ),
 }
 
 
