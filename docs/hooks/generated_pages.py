@@ -6,7 +6,8 @@
   module that defines it (numpydoc docstrings), one page per topic (``API_TOPICS``)
   and an index of them all;
 * ``tutorial-notebook.md``: the cells of ``docs/tutorial.ipynb`` (markdown as
-  is, code as Python blocks) with a link to the notebook itself;
+  is, code as Python blocks) with the outputs of a fresh run (figures as PNG,
+  results as their typeset HTML) and a link to the notebook itself;
 
 the mathematics of every page typeset as MathML and the docstrings' Sphinx-style
 cross-references made links (:func:`on_page_content`); the README's links, on the
@@ -17,9 +18,9 @@ from __future__ import annotations
 
 import html
 import inspect
-import json
 import re
 from pathlib import Path
+from typing import Any
 
 from mkdocs.structure.files import File
 
@@ -248,11 +249,48 @@ def _index_link(page: str, name: str, obj: object) -> str:
     return f"[`{name}`][{_path(obj)}]"
 
 
+def executed(text: str) -> Any:
+    """The notebook run top to bottom in a fresh kernel (``nbclient``), in a temporary
+    folder; a cell that raises fails the build (the notebook is broken)."""
+    import tempfile
+
+    import nbclient
+    import nbformat
+
+    notebook = nbformat.reads(text, as_version=4)
+    with tempfile.TemporaryDirectory() as folder:
+        nbclient.NotebookClient(
+            notebook, timeout=600, kernel_name="python3", resources={"metadata": {"path": folder}}
+        ).execute()
+    return notebook
+
+
+def _output(output: dict) -> str:
+    """One output of a code cell as the page shows it: a figure as its PNG, a result as
+    its HTML (typeset MathML), else its text."""
+    kind = output.get("output_type")
+    if kind == "stream":
+        return "```text\n" + "".join(output["text"]).rstrip() + "\n```\n"
+    data = output.get("data", {})
+    if "image/png" in data:
+        png = "".join(data["image/png"]).replace("\n", "")
+        img = f'<img alt="figure" src="data:image/png;base64,{png}">'
+        return f'<div class="nb-output">{img}</div>\n'
+    if "text/html" in data:
+        body = "".join(data["text/html"]).strip()
+        return f'<div class="nb-output">\n{body}\n</div>\n'
+    if "text/plain" in data:
+        return "```text\n" + "".join(data["text/plain"]).rstrip() + "\n```\n"
+    return ""
+
+
 def notebook_page(path: Path) -> str:
-    nb = json.loads(path.read_text(encoding="utf-8"))
+    """The tutorial notebook's cells with the outputs of a fresh run (``executed``)."""
+    nb = executed(path.read_text(encoding="utf-8"))
     parts = [
-        "_This page shows the cells of [the notebook](tutorial.ipynb) (download it and run "
-        "it in Jupyter: the results display typeset). The test suite executes it._\n"
+        "_This page shows [the notebook](tutorial.ipynb) with the outputs of a run made "
+        "when the site was built (download it and run it in Jupyter: the results display "
+        "the same way). The test suite executes it too._\n"
     ]
     for cell in nb["cells"]:
         source = "".join(cell["source"])
@@ -260,6 +298,7 @@ def notebook_page(path: Path) -> str:
             parts.append(source + "\n")
         elif cell["cell_type"] == "code":
             parts.append("```python\n" + source + "\n```\n")
+            parts.extend(_output(o) for o in cell.get("outputs", []))
     return "\n".join(parts)
 
 
