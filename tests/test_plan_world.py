@@ -33,7 +33,7 @@ from nilpotent.planning.verify import Checker
 from nilpotent.planning.world import World, world_from_dict
 
 ALPHA = (0.0, 2 * math.pi / 3, 4 * math.pi / 3)
-ROOM = Path(__file__).resolve().parents[1] / "examples" / "worlds" / "room.toml"
+ROOM = Path(__file__).resolve().parents[1] / "src/nilpotent/planning/worlds/room.toml"
 
 UNICYCLE = {
     "coordinates": ["x", "y", "theta"],

@@ -25,8 +25,9 @@ ToOpt = Annotated[
 
 WorldOpt = Annotated[
     Path | None,
-    typer.Option("--world", metavar="W.toml",
-                 help="World file: workspace bounds and obstacles (docs/worlds.md)."),
+    typer.Option("--world", metavar="W",
+                 help="World file (workspace bounds and obstacles), or a built-in world's "
+                      "name: room, parking."),
 ]
 
 LimitOpt = Annotated[

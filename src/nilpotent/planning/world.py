@@ -38,7 +38,7 @@ from shapely.geometry.base import BaseGeometry
 from nilpotent.core.expressions import parse_expression, real_value
 from nilpotent.errors import ExpressionError, WorldError
 
-__all__ = ["World", "load_world", "world_from_dict"]
+__all__ = ["World", "builtin_worlds", "load_world", "world_from_dict"]
 
 #: How far beyond the bounds the frame polygon (the outside of the workspace) reaches,
 #: as a multiple of the workspace's size.
@@ -223,13 +223,32 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
         raise WorldError(f"{source}: {exc}") from None
 
 
+def builtin_worlds() -> dict[str, Any]:
+    """The example worlds shipped with the package, by name (``room``, ``parking``).
+
+    Returns
+    -------
+    dict
+        Name -> the world file (an :class:`importlib.resources.abc.Traversable`).
+    """
+    from importlib.resources import files
+
+    folder = files("nilpotent.planning") / "worlds"
+    return {
+        f.name.removesuffix(".toml"): f
+        for f in sorted(folder.iterdir(), key=lambda f: f.name)
+        if f.name.endswith(".toml")
+    }
+
+
 def load_world(path: str | Path) -> World:
-    """Read a TOML world file (module doc).
+    """Read a TOML world file (module doc), or a shipped example world by name.
 
     Parameters
     ----------
     path : str or Path
-        The world file (TOML).
+        The world file (TOML), or the name of a world of :func:`builtin_worlds`
+        (``"room"``): a name is looked up only where no file of that name exists.
 
     Raises
     ------
@@ -238,10 +257,17 @@ def load_world(path: str | Path) -> World:
         :func:`world_from_dict` reports.
     """
     path = Path(path)
+    builtin = builtin_worlds()
+    if not path.exists() and str(path) in builtin:
+        return world_from_dict(tomllib.loads(builtin[str(path)].read_text("utf-8")), str(path))
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise WorldError(f"{path}: world file not found") from None
+        names = ", ".join(builtin)
+        raise WorldError(
+            f"{path}: world file not found (a path to a .toml file, or a built-in world: "
+            f"{names})"
+        ) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise WorldError(f"{path}: cannot read the world file ({exc})") from None
     try:
