@@ -82,6 +82,11 @@ def test_registry_names_are_the_interface_list():
         "engel",
         "cartan",
         "martinet",
+        "car",
+        "snakeboard",
+        "kinematic-snake",
+        "rigid-body",
+        "roto-translation",
     }
     assert list_models() == tuple(MODELS.values())
 
