@@ -75,7 +75,8 @@ def _plain_growth_vector(model) -> tuple[int, ...]:
     return tuple(growth)
 
 
-@pytest.mark.every_model(slow=("trident-snake-joints", "kinematic-snake"))  # length-3: 11 s, 3.7M ops
+# length-3 brackets: trident joints 3.7M operations, the snake 11 s
+@pytest.mark.every_model(slow=("trident-snake-joints", "kinematic-snake"))
 def test_brackets_match_plain_sympy_and_satisfy_jacobi(model) -> None:
     coords, f = model.coordinates, model.specialized_fields
     point = _random_point(model)
