@@ -85,6 +85,7 @@ def test_registry_names_are_the_interface_list():
         "car",
         "snakeboard",
         "kinematic-snake",
+        "space-robot",
         "rigid-body",
         "roto-translation",
     }
@@ -522,3 +523,22 @@ def test_outlines_follow_the_configuration(spec):
         here = [sp.N(e.subs(values).subs(p)) for e in (px, py)]
         there = [sp.N(e.subs(values).subs(shifted)) for e in (px, py)]
         assert abs(there[0] - here[0] - 1) < 1e-12 and abs(there[1] - here[1]) < 1e-12
+
+
+def test_space_robot_outline_has_its_links_and_keeps_the_centre_of_mass():
+    sys = get_model("space-robot", {"l": sp.Rational(3, 2)})
+    p = {c: v for c, v in zip(sys.coordinates, (sp.Rational(1, 5), sp.Rational(2, 3), -1),
+                              strict=True)}
+    values = sys.parameter_values
+    (base,) = sys.geometry.polygons
+    links = sys.geometry.segments
+    for seg in links:
+        (ax, ay), (bx, by) = ((sp.N(e.subs(values).subs(p), 30) for e in pt) for pt in seg)
+        assert abs(sp.sqrt((bx - ax) ** 2 + (by - ay) ** 2) - sp.Rational(3, 2)) < 1e-25
+    # centre of mass: base (mass m0) at the square's centre, rods at their midpoints -> origin
+    centre = [sum(sp.N(pt[k].subs(values).subs(p), 30) for pt in base) / 4 for k in range(2)]
+    mids = [[(sp.N(a[k].subs(values).subs(p), 30) + sp.N(b[k].subs(values).subs(p), 30)) / 2
+             for k in range(2)] for a, b in links]
+    m0, m = values["m0"], values["m"]
+    for k in range(2):
+        assert abs(m0 * centre[k] + m * (mids[0][k] + mids[1][k])) < 1e-25

@@ -120,6 +120,8 @@ CASES = {
     "space-robot": (lambda: load("space-robot"), {"q1": PI / 3, "q2": PI / 2}, True, (2, 3),
                     True),
     "space-robot-stretched": (lambda: load("space-robot"), {}, True, (2, 2, 3), False),
+    "space-robot-built-in": (lambda: get_model("space-robot", {"a": R(3, 2)}),
+                             {"q1": PI / 2, "q2": PI / 4}, True, (2, 3), True),
     "roto-translation": (lambda: get_model("roto-translation"), {"theta": PI / 6}, True, (2, 3),
                          True),
     "engel-scrambled": (lambda: load("engel-scrambled"), {"y1": R(3, 7), "y3": R(-2, 5)}, True,
@@ -203,17 +205,30 @@ def test_quaternion_chart_fields_are_half_q_times_omega():
         assert (sp.Matrix(f) - vdot).applyfunc(sp.simplify) == sp.zeros(3, 1)
 
 
-def test_space_robot_conserves_angular_momentum():
-    """Base (mass 2, inertia 1/3, joint 1/2 from its centre), links (mass 1, length 1, 1/12):
-    with zero linear momentum, the angular momentum about the centre of mass is 0 along X1, X2."""
-    system = load("space-robot")
+SPACE_ROBOTS = {  # (system, (base mass, base inertia, joint offset, link mass, link length))
+    "file": (lambda: load("space-robot"), (2, R(1, 3), R(1, 2), 1, 1)),
+    "built-in": (lambda: get_model("space-robot", {"m0": 3, "J0": R(1, 2), "a": R(1, 3),
+                                                   "m": 2, "l": R(3, 2)}),
+                 (3, R(1, 2), R(1, 3), 2, R(3, 2))),
+}
+
+
+@pytest.mark.parametrize("which", sorted(SPACE_ROBOTS))
+def test_space_robot_conserves_angular_momentum(which):
+    """A base and two uniform rods: with zero linear momentum, the angular momentum about the
+    centre of mass (built here from positions and velocities) is 0 along X1 and X2."""
+    factory, constants = SPACE_ROBOTS[which]
+    m0, j0, a, m, ln = (sp.S(c) for c in constants)  # exact (1/12 is not 0.0833...)
+    system = factory()
     th, q1, q2 = system.coordinates
     rates = sp.symbols("r0 r1 r2")
-    e = lambda a: sp.Matrix([sp.cos(a), sp.sin(a)])  # noqa: E731
-    joint1 = R(1, 2) * e(th)
-    centres = [sp.zeros(2, 1), joint1 + e(th + q1) / 2, joint1 + e(th + q1) + e(th + q1 + q2) / 2]
-    masses, inertias = (2, 1, 1), (R(1, 3), R(1, 12), R(1, 12))
-    com = sum((mi * c for mi, c in zip(masses, centres, strict=True)), sp.zeros(2, 1)) / 4
+    e = lambda t: sp.Matrix([sp.cos(t), sp.sin(t)])  # noqa: E731
+    joint1 = a * e(th)
+    joint2 = joint1 + ln * e(th + q1)
+    centres = [sp.zeros(2, 1), joint1 + ln * e(th + q1) / 2, joint2 + ln * e(th + q1 + q2) / 2]
+    masses, inertias = (m0, m, m), (j0, m * ln**2 / 12, m * ln**2 / 12)
+    weighted = sum((mi * c for mi, c in zip(masses, centres, strict=True)), sp.zeros(2, 1))
+    com = weighted / (m0 + 2 * m)
     spins = (rates[0], rates[0] + rates[1], rates[0] + rates[1] + rates[2])
     momentum = sum(i * s for i, s in zip(inertias, spins, strict=True))
     for mi, c in zip(masses, centres, strict=True):

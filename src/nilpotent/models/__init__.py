@@ -48,7 +48,13 @@ from nilpotent.models.trident import (
     trident_snake_paper,
     wheel_slip,
 )
-from nilpotent.models.vehicles import car, kinematic_snake, snake_singularity, snakeboard
+from nilpotent.models.vehicles import (
+    car,
+    kinematic_snake,
+    snake_singularity,
+    snakeboard,
+    space_robot,
+)
 
 __all__ = [
     "MAX_TRAILERS",
@@ -209,6 +215,7 @@ MODELS: Mapping[str, ModelInfo] = MappingProxyType(
                 positive_parameters=True,
                 example_at="alpha1=pi/2,alpha2=pi/2",
             ),
+            ModelInfo("space-robot", space_robot, positive_parameters=True),
             ModelInfo("rigid-body", rigid_body),
             ModelInfo("roto-translation", roto_translation),
         )
@@ -269,7 +276,7 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
         argument, an unknown parameter name, or a length parameter that is
         not a positive number (``trident-snake``: ``r``, ``l``;
         ``car-trailers``: ``d1..dK``; ``car``: ``L``, ``rmin``;
-        ``snakeboard``: ``l``; ``kinematic-snake``: ``R``).
+        ``snakeboard``: ``l``; ``kinematic-snake``: ``R``; ``space-robot``: all).
     """
     name, sep, arg = spec.partition(":")
     info = MODELS.get(name.strip())

@@ -30,7 +30,7 @@ coordinates; add ``--limit`` on any ``θ_i`` if needed).
 
 **Car** (``car``): :func:`~nilpotent.models.vehicles.car_outline`; default
 limit ``|φ| ≤ atan(L / rmin)`` from the model's own parameter values.
-**Snakeboard**, **kinematic snake**: their outlines
+**Snakeboard**, **kinematic snake**, **space robot**: their outlines
 (:mod:`nilpotent.models.vehicles`), no default limits.  **Rigid body**: no
 outline, ``|pitch| ≤ 17π/36``.
 """
@@ -42,7 +42,12 @@ import sympy as sp
 from nilpotent.core.outline import Limits, Outline
 from nilpotent.core.system import ControlSystem
 from nilpotent.models.groups import PITCH_LIMIT
-from nilpotent.models.vehicles import car_outline, snake_outline, snakeboard_outline
+from nilpotent.models.vehicles import (
+    car_outline,
+    snake_outline,
+    snakeboard_outline,
+    space_robot_outline,
+)
 
 __all__ = [
     "CAR_SIZE",
@@ -144,6 +149,8 @@ def with_builtin_constraints(system: ControlSystem) -> ControlSystem:
         return replace(system, geometry=snakeboard_outline(coords))
     if name == "kinematic-snake":
         return replace(system, geometry=snake_outline(coords))
+    if name == "space-robot":
+        return replace(system, geometry=space_robot_outline(coords))
     if name == "rigid-body":
         pitch = float(PITCH_LIMIT)
         return replace(system, limits=Limits((("pitch", -pitch, pitch),)))

@@ -13,10 +13,13 @@ vector independently).  Convention ``[X, Y] = DY·X − DX·Y``.
   snakeboard example);
 * :func:`kinematic_snake` — the three-link wheeled snake with joint-velocity
   inputs (Hirose 1993; Ostrowski & Burdick, IJRR 17(7), 1998; Shammas,
-  Choset & Rizzi, IJRR 26(10), 2007).
+  Choset & Rizzi, IJRR 26(10), 2007);
+* :func:`space_robot` — a free-floating planar robot, base and two links,
+  nonholonomic through the conservation of angular momentum (Nakamura &
+  Mukherjee, IEEE TRA 7(4), 1991; Vafa & Dubowsky 1987).
 
 Their outlines (for planning among obstacles) are :func:`car_outline`,
-:func:`snakeboard_outline` and :func:`snake_outline`.
+:func:`snakeboard_outline`, :func:`snake_outline` and :func:`space_robot_outline`.
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ __all__ = [
     "snake_singularity",
     "snakeboard",
     "snakeboard_outline",
+    "space_robot",
+    "space_robot_outline",
 ]
 
 _ZERO, _ONE = sp.Integer(0), sp.Integer(1)
@@ -195,6 +200,61 @@ def kinematic_snake() -> ControlSystem:
     )
 
 
+def space_robot() -> ControlSystem:
+    r"""A free-floating planar space robot, base and two links: ``(theta0, q1, q2)``.
+
+    A base (mass ``m0``, inertia ``J0`` about its centre of mass) carries a
+    two-link arm: joint 1 at distance ``a`` from the base's centre along its
+    axis, two uniform rods of mass ``m`` and length ``l`` (inertia
+    ``m l²/12``), joint angles ``q1``, ``q2``; ``θ0`` is the base attitude
+    (Nakamura & Mukherjee, IEEE TRA 7(4), 1991; Vafa & Dubowsky 1987).  With no
+    external force or torque and the robot at rest initially, the linear
+    momentum vanishes (the centre of mass ``c`` stays put) and so does the
+    angular momentum about ``c``:
+    ``Σ_i J_i ω_i + m_i (r_i − c) × (ṙ_i − ċ) = H0 θ̇0 + H1 q̇1 + H2 q̇2 = 0``
+    (``ω = θ̇0, θ̇0 + q̇1, θ̇0 + q̇1 + q̇2``).  Expanded, with ``M = m0 + 2m``::
+
+        M H0 = M J0 + 2 a² m m0 + 5 l² m²/6 + 5 l² m m0/3
+               + l² m (m/2 + m0) cos q2 + a l m m0 (3 cos q1 + cos(q1 + q2)),
+        M H1 = 5 l² m²/6 + 5 l² m m0/3 + l² m (m/2 + m0) cos q2
+               + a l m m0 (3 cos q1 + cos(q1 + q2)) / 2,
+        M H2 = 5 l² m²/12 + l² m m0/3 + l² m (m/4 + m0/2) cos q2 + a l m m0 cos(q1 + q2) / 2.
+
+    ``H0 > 0`` (it is the moment of inertia of the whole robot about ``c``
+    with the joints locked).  The joint rates are the inputs::
+
+        X1 = ∂q1 − (H1/H0) ∂θ0,   X2 = ∂q2 − (H2/H0) ∂θ0.
+
+    The constraint is not integrable: growth ``(2, 3)`` at generic shapes
+    (e.g. ``q1 = π/3, q2 = π/2``); at the stretched shape ``q = 0`` the first
+    bracket vanishes and the growth is ``(2, 2, 3)`` (singular).  Parameters
+    ``m0 = 2, J0 = 1/3, a = 1/2, m = 1, l = 1``.
+
+    Examples
+    --------
+    >>> space_robot().fields[0][1:]
+    (1, 0)
+    """
+    th, q1, q2 = sp.symbols("theta0 q1 q2")
+    m0, j0, a, m, ln = sp.symbols("m0 J0 a m l")
+    total = m0 + 2 * m
+    c1, c2, c12 = sp.cos(q1), sp.cos(q2), sp.cos(q1 + q2)
+    links = 5 * ln**2 * m**2 / 6 + 5 * ln**2 * m * m0 / 3 + ln**2 * m * (m / 2 + m0) * c2
+    h0 = total * j0 + 2 * a**2 * m * m0 + links + a * ln * m * m0 * (3 * c1 + c12)
+    h1 = links + a * ln * m * m0 * (3 * c1 + c12) / 2
+    h2 = (5 * ln**2 * m**2 / 12 + ln**2 * m * m0 / 3 + ln**2 * m * (m / 4 + m0 / 2) * c2
+          + a * ln * m * m0 * c12 / 2)
+    return ControlSystem(
+        "space-robot",
+        (th, q1, q2),
+        ((-h1 / h0, _ONE, _ZERO), (-h2 / h0, _ZERO, _ONE)),
+        (("m0", sp.Integer(2)), ("J0", sp.Rational(1, 3)), ("a", sp.Rational(1, 2)),
+         ("m", _ONE), ("l", _ONE)),
+        "free-floating planar space robot, base and two links, zero momentum "
+        "(Nakamura-Mukherjee 1991); growth (2,3) at generic shapes, (2,2,3) stretched",
+    )
+
+
 def _e(angle: sp.Expr) -> tuple[sp.Expr, sp.Expr]:
     return sp.cos(angle), sp.sin(angle)
 
@@ -258,3 +318,27 @@ def snake_outline(coords: tuple[sp.Symbol, ...]) -> Outline:
         segments=((rear_joint, front_joint), (front_joint, head), (rear_joint, tail)),
         discs=tuple((w, _ZERO) for w in wheels),
     )
+
+
+def space_robot_outline(coords: tuple[sp.Symbol, ...]) -> Outline:
+    """Base square (half-side ``a``) and the two links, about the fixed centre of mass (origin).
+
+    In the base frame the base centre is at 0, joint 1 at ``a e(θ0)``; every
+    point is shifted by minus the centre of mass, which does not move.
+    """
+    th, q1, q2 = coords
+    m0, a, m, ln = (sp.Symbol(k) for k in ("m0", "a", "m", "l"))
+    joint1 = _plus((_ZERO, _ZERO), a, th)
+    joint2 = _plus(joint1, ln, th + q1)
+    tip = _plus(joint2, ln, th + q1 + q2)
+    mid1, mid2 = _plus(joint1, ln / 2, th + q1), _plus(joint2, ln / 2, th + q1 + q2)
+    total = m0 + 2 * m
+    com = tuple((m * mid1[k] + m * mid2[k]) / total for k in range(2))
+
+    def at(p: tuple[sp.Expr, sp.Expr]) -> tuple[sp.Expr, sp.Expr]:
+        return p[0] - com[0], p[1] - com[1]
+
+    c, s = _e(th)
+    base = tuple(at((u * c - v * s, u * s + v * c))
+                 for u, v in ((-a, -a), (a, -a), (a, a), (-a, a)))
+    return Outline(polygons=(base,), segments=((at(joint1), at(joint2)), (at(joint2), at(tip))))
