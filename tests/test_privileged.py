@@ -8,6 +8,7 @@ import pytest
 import sympy as sp
 from hypothesis import HealthCheck, given, settings
 
+from conftest import model_point
 from nilpotent.core.brackets import word_field
 from nilpotent.core.filtration import analyze
 from nilpotent.core.privileged import METHODS, privileged_coordinates
@@ -45,11 +46,21 @@ def check_orders_with_sympy(sys: ControlSystem, coords) -> None:
         assert function_order(sys.specialized_fields, sys.coordinates, yj, p, wj + 1) == wj
 
 
+#: Built-ins whose linear adapted coordinates are not privileged at their example point, with the
+#: independent reason: the kinematic snake at alpha1 = alpha2 = pi/2 has X1 X1 z4 = 1/2 there
+#: (z = A (x - p), order 2 < weight 3; tests/test_models.py re-derives it).
+LINEAR_NOT_PRIVILEGED = {"kinematic-snake": "y4 has order 2 but weight 3"}
+
+
 @pytest.mark.parametrize("method", ALL_METHODS)
-@pytest.mark.every_model(slow=("trident-snake", "trident-snake-joints"))  # 10 s per method
-def test_orders_equal_weights_recomputed(model, method):
+@pytest.mark.every_model(slow=("trident-snake", "trident-snake-joints", "kinematic-snake"))
+def test_orders_equal_weights_recomputed(model, method):  # trident, snake: up to 10 s a method
     sys = model
-    coords = privileged_coordinates(sys, None, method)
+    if method == "linear" and sys.name in LINEAR_NOT_PRIVILEGED:
+        with pytest.raises(NotPrivilegedError, match=LINEAR_NOT_PRIVILEGED[sys.name]):
+            privileged_coordinates(sys, model_point(model), method)
+        return
+    coords = privileged_coordinates(sys, model_point(model), method)
     assert coords.orders == coords.weights
     check_orders_with_sympy(sys, coords)
     assert all(

@@ -1,7 +1,8 @@
 """Built-in models: a registry of driftless systems chosen by name.
 
 Families are data (one module per family: :mod:`~nilpotent.models.trident`,
-:mod:`~nilpotent.models.classic`, :mod:`~nilpotent.models.trailers`) plus this
+:mod:`~nilpotent.models.classic`, :mod:`~nilpotent.models.trailers`,
+:mod:`~nilpotent.models.vehicles`, :mod:`~nilpotent.models.groups`) plus this
 registry, which the CLI (``nilpotent models``), the docs and the tests all
 iterate over.
 
@@ -34,6 +35,7 @@ from nilpotent.core.expressions import format_expression
 from nilpotent.core.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
+from nilpotent.models.groups import rigid_body, roto_translation
 from nilpotent.models.outlines import with_builtin_constraints
 from nilpotent.models.trailers import car_trailers
 from nilpotent.models.trident import (
@@ -45,6 +47,13 @@ from nilpotent.models.trident import (
     trident_snake_joints,
     trident_snake_paper,
     wheel_slip,
+)
+from nilpotent.models.vehicles import (
+    car,
+    kinematic_snake,
+    snake_singularity,
+    snakeboard,
+    space_robot,
 )
 
 __all__ = [
@@ -60,6 +69,7 @@ __all__ = [
     "load_system",
     "models_to_json",
     "paper_singularity",
+    "snake_singularity",
     "wheel_slip",
 ]
 
@@ -98,6 +108,11 @@ class ModelInfo:
         refuses other values with :class:`ModelError`.
     summary : str
         A family's one-line description (``""``: the built model's own).
+    example_at : str
+        A point in the ``--at`` syntax (``"alpha1=pi/2,alpha2=pi/2"``) where
+        the model is defined and regular, for a model whose fields are
+        undefined at the origin (``kinematic-snake``); ``""``: the origin.
+        The ``every_model`` tests and :meth:`example_point` use it.
     """
 
     name: str
@@ -107,6 +122,7 @@ class ModelInfo:
     parameter_note: str = ""
     positive_parameters: bool = False
     summary: str = ""
+    example_at: str = ""
 
     @cached_property
     def example(self) -> ControlSystem:
@@ -137,6 +153,19 @@ class ModelInfo:
     def example_spec(self) -> str:
         """A spec that :func:`get_model` accepts (``"car-trailers:1"``)."""
         return f"{self.name}:{self.default_argument}" if self.argument else self.name
+
+    def example_point(self, system: ControlSystem | None = None) -> tuple[sp.Expr, ...]:
+        """:attr:`example_at` as a point of ``system`` (default :attr:`example`), exact.
+
+        Parameters
+        ----------
+        system : ControlSystem or None
+            The built model (with any parameters applied); ``None``: :attr:`example`.
+        """
+        from nilpotent.core.points import parse_point
+
+        sys = system if system is not None else self.example
+        return parse_point(self.example_at, sys) if self.example_at else sys.origin()
 
     def parameter_summary(self) -> str:
         """``"r=1, l=1"``, the family rule, or ``""`` when there are none."""
@@ -178,6 +207,17 @@ MODELS: Mapping[str, ModelInfo] = MappingProxyType(
             ModelInfo("engel", engel),
             ModelInfo("cartan", cartan),
             ModelInfo("martinet", martinet),
+            ModelInfo("car", car, positive_parameters=True),
+            ModelInfo("snakeboard", snakeboard, positive_parameters=True),
+            ModelInfo(
+                "kinematic-snake",
+                kinematic_snake,
+                positive_parameters=True,
+                example_at="alpha1=pi/2,alpha2=pi/2",
+            ),
+            ModelInfo("space-robot", space_robot, positive_parameters=True),
+            ModelInfo("rigid-body", rigid_body),
+            ModelInfo("roto-translation", roto_translation),
         )
     }
 )
@@ -235,7 +275,8 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
         Unknown name (the message lists the known ones), a bad or missing
         argument, an unknown parameter name, or a length parameter that is
         not a positive number (``trident-snake``: ``r``, ``l``;
-        ``car-trailers``: ``d1..dK``).
+        ``car-trailers``: ``d1..dK``; ``car``: ``L``, ``rmin``;
+        ``snakeboard``: ``l``; ``kinematic-snake``: ``R``; ``space-robot``: all).
     """
     name, sep, arg = spec.partition(":")
     info = MODELS.get(name.strip())
@@ -251,7 +292,6 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                 f"model {spec!r} needs its argument: {info.usage} (e.g. {info.example_spec})"
             )
         system = info.build(_parse_argument(spec, info, arg))
-    system = with_builtin_constraints(system)  # outline and default limits (planning)
     if params:
         system = system.with_parameters(dict(params))
     if info.positive_parameters:
@@ -260,7 +300,7 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                 raise ModelError(
                     f"model {spec!r}: parameter {key} must be a positive number, got {value}"
                 )
-    return system
+    return with_builtin_constraints(system)  # outline and default limits (planning)
 
 
 def _shown(text: str, limit: int = 200) -> str:
