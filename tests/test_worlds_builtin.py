@@ -67,3 +67,13 @@ def test_an_unknown_world_on_the_command_line_is_a_world_error(run_cli, tmp_path
     status, out, _ = run_cli("plan", "unicycle", "--to", "x=0.1", "--world", "nowhere", "--json")
     assert status == 2 and json.loads(out)["error"]["kind"] == "world"
     assert "room" in json.loads(out)["error"]["message"]
+
+
+def test_the_example_worlds_by_path_are_the_shipped_ones():
+    """``examples/worlds/*.toml`` stay where the README and earlier releases put them
+    (``--world examples/worlds/room.toml``); they are the shipped files, byte for byte."""
+    from pathlib import Path
+
+    examples = Path(__file__).resolve().parents[1] / "examples" / "worlds"
+    for name, file in builtin_worlds().items():
+        assert (examples / f"{name}.toml").read_bytes() == file.read_bytes()
