@@ -156,7 +156,7 @@ def test_unsupported_schemes_are_refused_naming_the_address(address):
 
 @pytest.mark.parametrize("address", [
     "tcp://127.0.0.1", "tcp://:8786", "tcp://h:0", "tcp://h:65536", "tcp://h:port",
-    "h:-1", "tcp://a b:8786", "",
+    "h:-1", "tcp://a b:8786", "", "tcp://h:123456789012345678901234567890", "LOCAL",
 ])
 def test_malformed_addresses_are_refused(address):
     from nilpotent.errors import OptionError
@@ -324,3 +324,20 @@ def test_a_killed_worker_is_retried_and_a_task_that_kills_every_worker_is_an_err
                         dask=cluster, progress_timeout=SLACK)
     finally:
         cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
+
+
+def test_a_chunk_that_never_finishes_is_an_error_after_the_progress_timeout():
+    # a worker is there but busy past the timeout (as a hung one would be)
+    import time
+
+    import distributed
+
+    from nilpotent.errors import DaskError
+    from nilpotent.simulation.executors import execute
+
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        t0 = time.monotonic()
+        with pytest.raises(DaskError, match=r"no chunk finished for 1 s .*workers: 1\)"):
+            execute(time.sleep, [3.0], [1], dask=cluster, progress_timeout=1.0)
+        assert time.monotonic() - t0 < SLACK

@@ -186,13 +186,15 @@ def check_address(address: str) -> str:
     if scheme.lower() != "tcp":
         hint = (" (TLS needs certificates: pass a distributed.Client made with a "
                 "distributed.Security from Python)" if scheme.lower() in ("tls", "wss") else "")
-        raise OptionError(f"the Dask scheduler address {shown} uses the scheme {scheme}://, "
-                          f"which is not supported; use {SUPPORTED_ADDRESSES}{hint}")
+        raise OptionError(f"the Dask scheduler address {shown} uses the scheme "
+                          f"{scheme[:20] + '://'!r}, which is not supported; use "
+                          f"{SUPPORTED_ADDRESSES}{hint}")
     host, colon, port = rest.rpartition(":")
     if host.startswith("[") and host.endswith("]"):
         host = host[1:-1]
     if (not colon or not host or any(c.isspace() or c in "/?#@[]" for c in host)
-            or not (port.isascii() and port.isdigit()) or not 0 < int(port[:6]) <= 65535):
+            or not (port.isascii() and port.isdigit() and len(port) <= 5)
+            or not 0 < int(port) <= 65535):
         raise OptionError(f"the Dask scheduler address {shown} is not of the form "
                           f"{SUPPORTED_ADDRESSES} (PORT from 1 to 65535)")
     return f"tcp://{rest}"
@@ -388,12 +390,24 @@ def _gather(distributed: Any, client: Any, func: Callable[[Any], Any], tasks: Se
         No task finished for ``patience`` seconds, the scheduler was lost, a
         task killed its workers, or a worker cannot import what the task needs.
     """
+    futures = client.map(func, list(tasks), pure=False)
+    pending = set(futures)
+    try:
+        return _collect(distributed, client, futures, pending, sizes, tick, patience,
+                        scheduler)
+    finally:
+        for fut in pending:  # after a failure: the cluster (perhaps the user's) drops them
+            fut.release()
+
+
+def _collect(distributed: Any, client: Any, futures: list[Any], pending: set[Any],
+             sizes: Sequence[int], tick: Callable[[int], None], patience: float,
+             scheduler: str) -> list[Any]:
+    """The loop of :func:`_gather`: results in order; ``pending`` shrinks as they come."""
     from distributed.client import FutureCancelledError, FuturesCancelledError
 
-    futures = client.map(func, list(tasks), pure=False)
     index = {f.key: k for k, f in enumerate(futures)}
-    results: list[Any] = [None] * len(tasks)
-    pending = set(futures)
+    results: list[Any] = [None] * len(futures)
     done = 0
     last = time.monotonic()
     while pending:
@@ -408,14 +422,15 @@ def _gather(distributed: Any, client: Any, func: Callable[[Any], Any], tasks: Se
             raise _lost(scheduler, None)
         for fut in finished:
             k = index[fut.key]
-            results[k] = _result(distributed, fut, k, len(tasks), scheduler)
+            results[k] = _result(distributed, fut, k, len(futures), scheduler)
             pending.discard(fut)
             done += int(sizes[k])
             tick(done)
         if finished:
             last = time.monotonic()
         elif time.monotonic() - last > patience:
-            raise _stalled(client, scheduler, patience, len(tasks) - len(pending), len(tasks))
+            raise _stalled(client, scheduler, patience, len(futures) - len(pending),
+                           len(futures))
     return results
 
 
@@ -463,7 +478,7 @@ def _stalled(client: Any, scheduler: str, patience: float, finished: int,
             f"{patience:g} s ({where}); start workers (dask worker {scheduler}) or {option}")
     return DaskError(
         f"no chunk finished for {patience:g} s on the Dask scheduler at {scheduler} "
-        f"({where}, {workers if workers >= 0 else 'unknown'} workers): a worker may hang, "
+        f"({where}; workers: {workers if workers >= 0 else 'unknown'}): a worker may hang, "
         f"or a chunk takes longer; lower the chunk size (--chunk-size) or {option}")
 
 
