@@ -201,53 +201,81 @@ def check_address(address: str) -> str:
 
 
 def _probe(address: str, timeout: float) -> None:
-    """Dask's handshake and an ``identity`` request to ``address``, within ``timeout`` s.
+    """Reach ``address`` and ask it, with Dask's handshake, what it is.
 
-    Run on a thread of its own (its own event loop, whatever the caller's), and
-    bounded there: ``distributed``'s own connect does not bound the handshake,
-    so a port that accepts and never answers would hold ``Client()`` forever.
+    Two steps, each within ``timeout`` seconds: a TCP connection (refusals
+    retried, as Dask does, while the scheduler may still be starting), then
+    Dask's handshake and an ``identity`` request.  Run on a thread of its own
+    (its own event loop, whatever the caller's) and bounded there:
+    ``distributed``'s own connect does not bound the handshake, so a port that
+    accepts and never answers would hold ``Client()`` forever.  Which step
+    failed decides the message, not how long it took.
 
     Raises
     ------
     OptionError
-        Nothing answers, something that is not a Dask scheduler answers, or it is too slow.
+        Nothing accepts the connection, something that is not a Dask scheduler
+        answers, or nothing answers.
     """
     import asyncio
     import threading
 
+    from distributed.comm.addressing import parse_address, parse_host_port
     from distributed.comm.core import connect
 
-    answer: dict[str, Any] = {}
+    host, port = parse_host_port(parse_address(address)[1])
+    answer: dict[str, Any] = {"step": "connect"}
+
+    async def reach() -> None:
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout
+        while True:
+            try:
+                _, writer = await asyncio.wait_for(asyncio.open_connection(host, port),
+                                                   max(deadline - loop.time(), 0.01))
+            except ConnectionRefusedError:
+                if loop.time() + 0.2 >= deadline:
+                    raise
+                await asyncio.sleep(0.2)
+                continue
+            writer.close()
+            with contextlib.suppress(OSError):
+                await writer.wait_closed()
+            return
 
     async def ask() -> Any:
-        comm = await connect(address, timeout=timeout)
+        await reach()
+        answer["step"] = "answer"
+        comm = await asyncio.wait_for(connect(address, timeout=timeout), timeout)
         try:
-            await comm.write({"op": "identity", "reply": True})
-            return await comm.read()
+            await asyncio.wait_for(comm.write({"op": "identity", "reply": True}), timeout)
+            return await asyncio.wait_for(comm.read(), timeout)
         finally:
             comm.abort()
 
     def run() -> None:
         try:
-            answer["reply"] = asyncio.run(asyncio.wait_for(ask(), timeout))
+            answer["reply"] = asyncio.run(ask())
         except BaseException as exc:  # reported to the caller's thread below
             answer["error"] = exc
 
     thread = threading.Thread(target=run, name="nilpotent-dask-probe", daemon=True)
     thread.start()
-    thread.join(timeout + 5.0)
+    thread.join(4 * timeout + 5.0)  # the steps bound themselves; this is a last resort
     shown = repr(address)[:200]
     error = answer.get("error")
-    if thread.is_alive() or isinstance(error, TimeoutError | asyncio.TimeoutError):
+    if answer["step"] == "connect":
+        if thread.is_alive() or isinstance(error, TimeoutError):
+            why = "no answer to the connection: a firewall, or a wrong host?"
+        else:
+            why = f"{error}: is it running, and is the address right?"
+        raise OptionError(f"cannot reach the Dask scheduler at {shown} within {timeout:g} s "
+                          f"({why})") from None
+    if thread.is_alive() or isinstance(error, TimeoutError):
         raise OptionError(
             f"the server at {shown} did not answer as a Dask scheduler within {timeout:g} s "
-            "(a firewall, or another service on that port?); raise dask_connect_timeout "
+            "(another service on that port?); raise dask_connect_timeout "
             "(--dask-connect-timeout) if it is only slow") from None
-    if isinstance(error, OSError):
-        while error.__cause__ is not None:  # the first cause: "Connection refused", ...
-            error = error.__cause__
-        raise OptionError(f"cannot reach the Dask scheduler at {shown} within {timeout:g} s "
-                          f"({error}): is it running, and is the address right?") from None
     if error is not None and not isinstance(error, Exception):
         raise error
     reply = answer.get("reply")
@@ -446,8 +474,9 @@ def _result(distributed: Any, fut: Any, k: int, count: int, scheduler: str) -> A
         raise DaskError(
             f"chunk {k + 1} of {count} was running on Dask workers that died each time "
             f"(more than the scheduler's distributed.scheduler.allowed-failures): {exc}; "
-            "a chunk may need more memory than a worker has: lower the chunk size "
-            "(--chunk-size)") from None
+            "a chunk may need more memory than a worker has (lower the chunk size, "
+            "--chunk-size), or the workers cannot load nilpotent (every worker needs the "
+            f"same nilpotent installed: {_INSTALL_DASK})") from None
     except FutureCancelledError:
         raise _lost(scheduler, None) from None
     except ImportError as exc:
@@ -475,7 +504,9 @@ def _stalled(client: Any, scheduler: str, patience: float, finished: int,
     if workers == 0:
         return DaskError(
             f"the Dask scheduler at {scheduler} has no workers: no chunk finished for "
-            f"{patience:g} s ({where}); start workers (dask worker {scheduler}) or {option}")
+            f"{patience:g} s ({where}); start workers (dask worker {scheduler}; each needs "
+            f"the same nilpotent installed, a worker that cannot load it stops at its first "
+            f"chunk) or {option}")
     return DaskError(
         f"no chunk finished for {patience:g} s on the Dask scheduler at {scheduler} "
         f"({where}; workers: {workers if workers >= 0 else 'unknown'}): a worker may hang, "
