@@ -339,5 +339,5 @@ def test_a_chunk_that_never_finishes_is_an_error_after_the_progress_timeout():
                                   dashboard_address=None) as cluster:
         t0 = time.monotonic()
         with pytest.raises(DaskError, match=r"no chunk finished for 1 s .*workers: 1\)"):
-            execute(time.sleep, [3.0], [1], dask=cluster, progress_timeout=1.0)
+            execute(time.sleep, [4.0], [1], dask=cluster, progress_timeout=1.0)
         assert time.monotonic() - t0 < SLACK

@@ -446,7 +446,7 @@ def _collect(distributed: Any, client: Any, futures: list[Any], pending: set[Any
             raise _lost(scheduler, None) from None
         except TimeoutError:
             finished = set()
-        if client.status not in ("running", "connecting"):
+        if client.status != "running":  # "connecting": lost, the futures with it
             raise _lost(scheduler, None)
         for fut in finished:
             k = index[fut.key]
