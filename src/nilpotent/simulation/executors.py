@@ -401,9 +401,10 @@ def _execute_dask(func: Callable[[Any], Any], tasks: Sequence[Any], sizes: Seque
         # (tracebacks on stderr) say nothing the error does not
         with _quiet("distributed") if failed else contextlib.nullcontext():
             if own_client:
-                client.close(timeout=connect)
+                with contextlib.suppress(TimeoutError, OSError):  # the results are in hand
+                    client.close(timeout=connect)
             if cluster is not None:
-                cluster.close(timeout=connect)
+                cluster.close()
     return Execution(results, "dask", scheduler, wall)
 
 
