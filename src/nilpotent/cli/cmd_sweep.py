@@ -221,7 +221,19 @@ def sweep_command(
     dask: Annotated[
         str | None,
         typer.Option("--dask", metavar="ADDRESS|local",
-                     help="Run the chunks on Dask (needs pip install \"nilpotent[dask]\")."),
+                     help="Run the chunks on Dask (needs pip install \"nilpotent[dask]\"): "
+                          "tcp://HOST:PORT, HOST:PORT or local."),
+    ] = None,
+    dask_connect_timeout: Annotated[
+        float | None,
+        typer.Option("--dask-connect-timeout", metavar="S",
+                     help="Seconds to reach the --dask scheduler (default 10)."),
+    ] = None,
+    dask_progress_timeout: Annotated[
+        float | None,
+        typer.Option("--dask-progress-timeout", metavar="S",
+                     help="Stop with an error when no chunk finishes for S seconds "
+                          "(default 120)."),
     ] = None,
     out: Annotated[
         Path | None,
@@ -240,6 +252,11 @@ def sweep_command(
         raise OptionError(f"--out {literal(out)}: the rows are written as CSV (use .csv)")
     check_writable(out, "--out")
     check_plot_path(plot)
+    if dask is not None or dask_connect_timeout is not None or dask_progress_timeout is not None:
+        from nilpotent.simulation.executors import check_dask
+
+        check_dask(dask, chunk_size, connect_timeout=dask_connect_timeout,
+                   progress_timeout=dask_progress_timeout)  # before any work
     varied = parse_vary(vary)
     combinations = math.prod(len(v) for v in varied.values())
     if combinations > MAX_VARY_COMBINATIONS:
@@ -269,6 +286,8 @@ def sweep_command(
             system, pairs, amps, point=point, samples=samples, radius=radius, seed=seed,
             design=design, vary=varied or None, periods=periods, rtol=rtol, atol=rtol * 1e-2,
             bound=bound, chunk_size=chunk_size, dask=dask, progress=progress,
+            dask_connect_timeout=dask_connect_timeout,
+            dask_progress_timeout=dask_progress_timeout,
         )
     if out is not None:
         with write_atomically(out, suffix=".csv") as tmp:

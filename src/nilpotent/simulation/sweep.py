@@ -252,6 +252,8 @@ def sweep(
     chunk_size: int = 4096,
     dask: Any = None,
     progress: Callable[[int, int], None] | None = None,
+    dask_connect_timeout: float | None = None,
+    dask_progress_timeout: float | None = None,
 ) -> SweepResult:
     r"""Simulate many bracket motions of ``system`` and of its nilpotent approximation at $p$.
 
@@ -299,6 +301,12 @@ def sweep(
         (:class:`~nilpotent.errors.MissingExtraError` otherwise).
     progress:
         Called as ``progress(done_pairs, total_pairs)`` after each chunk.
+    dask_connect_timeout, dask_progress_timeout:
+        Seconds to reach a scheduler given by address (default
+        :data:`~nilpotent.simulation.executors.DEFAULT_CONNECT_TIMEOUT`), and
+        without a finished chunk before the sweep stops with a
+        :class:`~nilpotent.errors.DaskError` (default
+        :data:`~nilpotent.simulation.executors.DEFAULT_PROGRESS_TIMEOUT`); Dask only.
 
     Returns
     -------
@@ -335,7 +343,8 @@ def sweep(
         raise OptionError(f"bound must be a number > 0, got {bound}")
     pairs = _check_brackets(system.m, brackets)
     varied = _parameter_sets(system, vary)
-    check_dask(dask, chunk_size)
+    check_dask(dask, chunk_size, connect_timeout=dask_connect_timeout,
+               progress_timeout=dask_progress_timeout)
 
     # --- one job per parameter set ---------------------------------------------------
     from nilpotent.core.approximation import approximate
@@ -399,7 +408,8 @@ def sweep(
                 time_samples=int(time_samples), settings=settings,
             ))
     done = execute(_run_chunk, chunks, [c.rows.size for c in chunks], dask=dask,
-                   progress=progress)
+                   progress=progress, connect_timeout=dask_connect_timeout,
+                   progress_timeout=dask_progress_timeout)
     outputs, backend, scheduler, wall = (done.outputs, done.backend, done.scheduler,
                                          done.wall_time)
 
