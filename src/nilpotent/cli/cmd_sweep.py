@@ -268,7 +268,11 @@ def sweep_command(
     _check_vary_values(model, param, varied)
     pairs = [parse_int_pair(b, "--bracket", system.m) for b in bracket]
     point = parse_point_option(at, system)
-    motions = len(amps) * len(pairs) * max(samples, 1) * math.prod(len(v) for v in varied.values())
+    if design == "random":  # `samples` rows, each with its own amplitude, bracket and set
+        motions = max(samples, 1)
+    else:
+        motions = (len(amps) * len(pairs) * max(samples, 1)
+                   * math.prod(len(v) for v in varied.values()))
     if motions > MAX_SWEEP_MOTIONS:
         raise ComputationLimitError(
             f"the sweep asks for {motions:,} bracket motions (amplitudes x brackets x "
