@@ -327,3 +327,18 @@ def test_world_names_are_literal_in_plot_titles(run_cli, tmp_path, name):
     assert status == 0, (out, err)
     assert json.loads(out)["world"] == name
     assert figure.stat().st_size > 0
+
+
+def test_a_world_name_is_bounded(run_cli, tmp_path):
+    world = _world(tmp_path, f"name = {json.dumps('[b]' * 70)}\n")
+    error = _error(*run_cli("plan", _robot(tmp_path), "--to", "x=0.3", "--world", world,
+                            "--json"))
+    assert error["kind"] == "world" and "characters" in error["message"]
+
+
+@pytest.mark.parametrize("spec", ["car-trailers:10", "car-trailers:" + "7" * 5000])
+def test_car_trailers_beyond_the_computable_bound_is_refused(run_cli, spec):
+    from nilpotent.models import MAX_TRAILERS
+
+    error = _error(*run_cli("analyze", spec, "--json"))
+    assert error["kind"] == "model" and f"between 1 and {MAX_TRAILERS}" in error["message"]

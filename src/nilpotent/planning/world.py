@@ -53,6 +53,8 @@ __all__ = ["MAX_OBSTACLES", "MAX_POLYGON_VERTICES", "World", "load_world", "worl
 MAX_OBSTACLES = 1000
 #: Most vertices of one obstacle polygon.
 MAX_POLYGON_VERTICES = 1000
+#: Longest world name, in characters (as a model's name).
+MAX_NAME_LENGTH = 200
 
 #: How far beyond the bounds the frame polygon (the outside of the workspace) reaches,
 #: as a multiple of the workspace's size.
@@ -213,6 +215,9 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
     name = data.get("name", Path(source).stem if not source.startswith("<") else "world")
     if not isinstance(name, str) or not name:
         raise WorldError(f"{source}: name must be a non-empty string")
+    if len(name) > MAX_NAME_LENGTH:
+        raise WorldError(f"{source}: name has {len(name):,} characters, above the limit "
+                         f"{MAX_NAME_LENGTH} of a world's name")
     bounds = None
     if "bounds" in data:
         raw = data["bounds"]
