@@ -342,3 +342,18 @@ def test_car_trailers_beyond_the_computable_bound_is_refused(run_cli, spec):
 
     error = _error(*run_cli("analyze", spec, "--json"))
     assert error["kind"] == "model" and f"between 1 and {MAX_TRAILERS}" in error["message"]
+
+
+def test_the_number_of_pieces_of_a_global_path_is_bounded():
+    """A long path cut at the --max-piece floor is refused before billions of waypoints."""
+    import numpy as np
+
+    from nilpotent.cli.plan_options import MIN_MAX_PIECE
+    from nilpotent.errors import ComputationLimitError
+    from nilpotent.planning import global_planner as gp
+
+    assert MIN_MAX_PIECE == gp.MIN_PIECE  # the option's floor is the planner's own
+    path = [np.zeros(3), np.array([3.0, 4.0, 0.0]), np.array([3.0, 4.0, 12.0])]  # length 17
+    assert len(gp._densify(path, 0.5)) == 1 + 10 + 24
+    with pytest.raises(ComputationLimitError, match="--max-piece"):
+        gp._densify(path, 17 / (gp.MAX_PIECES + 1) * 0.999)
