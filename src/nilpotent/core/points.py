@@ -6,9 +6,10 @@ the unnamed ones are 0.  Values go through the expression grammar
 and ``E``, so they are constants: exact where written exactly (``pi/3``,
 ``1/2``, ``sqrt(2)``); decimals are read as the exact rationals they denote
 (``0.7`` is ``7/10``, ``1e-300`` is ``10**-300``).  They must be finite real
-numbers of magnitude at most :data:`MAX_MAGNITUDE` (``1e6``; a bigger
-coordinate, parameter or fraction is refused with a clear error: no computation
-of the tool is meaningful at that scale, and doubles lose the small terms).
+numbers; a point's coordinates are of magnitude at most :data:`MAX_MAGNITUDE`
+(``1e6``; a bigger coordinate is refused with a clear error: no numerical
+computation of the tool is meaningful at that scale, and doubles lose the small
+terms).  Parameters (``--param``) may be any finite double.
 Commas inside parentheses (``atan2(1, 2)``) belong to the value.  A name may
 appear once per option (``x=1,x=2`` is refused, not "the last one wins").
 
@@ -107,13 +108,15 @@ def _split_top_level(text: str) -> list[str]:
 
 
 def parse_assignments(
-    text: str, where: str, error: type[NilpotentError], example: str
+    text: str, where: str, error: type[NilpotentError], example: str,
+    limit: float | None = MAX_MAGNITUDE,
 ) -> list[tuple[str, sp.Expr]]:
     """Parse ``NAME=VALUE,...`` into (name, constant value) pairs, in order.
 
     The one parser of every ``NAME=VALUE,...`` option (points, ``--param``,
     ``--mismatch``): each value a finite real constant of the grammar of
-    magnitude at most :data:`MAX_MAGNITUDE`, each name once.
+    magnitude at most ``limit`` (:data:`MAX_MAGNITUDE`; ``None``: any double, as
+    for parameters, whose scale the exact commands handle), each name once.
 
     Parameters
     ----------
@@ -125,6 +128,8 @@ def parse_assignments(
         The error raised for a malformed text.
     example : str
         A well-formed example, shown in messages.
+    limit : float or None
+        The largest magnitude allowed (``None``: any finite double).
 
     Returns
     -------
@@ -159,7 +164,9 @@ def parse_assignments(
         place = f"{where} {name}"
         try:
             expr = parse_expression(value, {}, where=place)
-            check_magnitude(real_value(expr, where=place), place, error=error)
+            number = real_value(expr, where=place)  # finite, within a double
+            if limit is not None:
+                check_magnitude(number, place, low=-limit, high=limit, error=error)
         except ExpressionError as exc:
             raise error(str(exc)) from None
         out.append((name, _exact_decimal_value(value, expr)))
@@ -252,7 +259,10 @@ def parse_param_assignments(
         items = [items]
     out: dict[str, sp.Expr] = {}
     for item in items:
-        for name, expr in parse_assignments(item, option, ModelError, f"{option} r=1/2"):
+        # parameters: any finite double (exact commands are scale-invariant: l = 1e300
+        # is a valid trident); the commands that compute in floats check what they use
+        for name, expr in parse_assignments(item, option, ModelError, f"{option} r=1/2",
+                                            limit=None):
             if not name.isidentifier():
                 raise ModelError(f"{option}: {name!r} in {item!r} is not a parameter name")
             if name in out:
