@@ -280,8 +280,9 @@ def test_a_json_world_plans_like_its_toml_twin(run_cli, tmp_path):
     assert status == 0, (out, err)
     data = json.loads(out)
     assert data["world"] == "yard" and data["error"] <= 1e-8
-    # the robot (radius 0.1) moves along y = 0 near the disc at distance 1.2 - 0.2 - 0.1
-    assert 0 < data["clearance"] <= 0.9 + 1e-6
+    # the world is seen: the clearance is at most the start's, |(0.3, 1.2)| - 0.2 - 0.1
+    # (robot radius 0.1 at the origin; the bounds are farther, 2 - 0.1)
+    assert 0 < data["clearance"] <= math.hypot(0.3, 1.2) - 0.3 + 1e-9
 
 
 # --- 4. obstacles covering start or goal, outlines that are not defined -----------------
