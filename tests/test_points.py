@@ -108,7 +108,8 @@ def test_format_point():
 
 
 _values = st.one_of(
-    st.fractions(max_denominator=50).map(lambda f: sp.Rational(f.numerator, f.denominator)),
+    st.fractions(min_value=-10**6, max_value=10**6, max_denominator=50).map(
+        lambda f: sp.Rational(f.numerator, f.denominator)),
     st.floats(min_value=-1e6, max_value=1e6, allow_nan=False).map(sp.Float),
     st.sampled_from([sp.pi / 3, -sp.sqrt(2) / 2, sp.E, sp.atan(sp.Rational(1, 3))]),
 )

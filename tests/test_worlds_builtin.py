@@ -31,7 +31,11 @@ def test_a_world_by_name_is_the_same_as_by_path():
 def test_a_file_of_that_name_wins_over_the_builtin(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     (tmp_path / "room").write_text('name = "mine"\n[bounds]\nx = [0, 1]\ny = [0, 1]\n')
-    assert load_world("room").name == "mine"
+    # the file is read, not the built-in: a world file needs its suffix, so it is refused
+    with pytest.raises(WorldError, match="suffix"):
+        load_world("room")
+    (tmp_path / "room.toml").write_text('name = "mine"\n[bounds]\nx = [0, 1]\ny = [0, 1]\n')
+    assert load_world("room.toml").name == "mine"
 
 
 def test_an_unknown_world_names_the_builtin_ones(tmp_path, monkeypatch):

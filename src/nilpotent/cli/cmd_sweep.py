@@ -26,6 +26,7 @@ from nilpotent.cli.app import (
     ParamOpt,
     PlotOpt,
     app,
+    bounded_float,
     bounded_int,
     check_plot_path,
     check_writable,
@@ -43,6 +44,9 @@ from nilpotent.cli.app import (
     write_atomically,
 )
 from nilpotent.errors import ComputationLimitError, OptionError
+
+MAX_BOUND = 1e12
+"""Largest ``--bound`` (the blow-up threshold of a trajectory, model units)."""
 
 
 def parse_amplitudes(text: str) -> list[float]:
@@ -188,12 +192,13 @@ def sweep_command(
     radius: Annotated[
         float,
         typer.Option("--radius", metavar="R",
-                     help="Start points uniform in the ball of radius R round p."),
+                     help="Start points uniform in the ball of radius R round p.",
+                     parser=bounded_float("--radius", 0.0)),
     ] = 0.0,
     seed: Annotated[
         int,
         typer.Option("--seed", metavar="S", help="Random seed.",
-                     parser=bounded_int("--seed", 0, MAX_SEED)),
+                     parser=bounded_int("--seed", 0, MAX_SEED, above=OptionError)),
     ] = 0,
     design: Annotated[
         str, typer.Option("--design", metavar="grid|random", help="Sampling design.")
@@ -209,9 +214,13 @@ def sweep_command(
                      help=f"Whole periods of the loop (1 to {MAX_PERIODS}).",
                      parser=bounded_int("--periods", 1, MAX_PERIODS)),
     ] = 1,
-    rtol: Annotated[float, typer.Option("--rtol", help="Relative tolerance.")] = 1e-10,
+    rtol: Annotated[float, typer.Option(
+        "--rtol", help="Relative tolerance (> 0, at most 1).",
+        parser=bounded_float("--rtol", 0.0, 1.0, open_low=True))] = 1e-10,
     bound: Annotated[
-        float, typer.Option("--bound", help="Stop (and report) a trajectory once |x_k| > bound.")
+        float, typer.Option("--bound", help="Stop (and report) a trajectory once |x_k| > bound "
+                            f"(> 0, at most {MAX_BOUND:g}).",
+                            parser=bounded_float("--bound", 0.0, MAX_BOUND, open_low=True))
     ] = 1e6,
     chunk_size: Annotated[
         int,
@@ -227,11 +236,15 @@ def sweep_command(
     dask_connect_timeout: Annotated[
         float | None,
         typer.Option("--dask-connect-timeout", metavar="S",
+                     parser=bounded_float("--dask-connect-timeout", 0.0, 86400.0,
+                                          open_low=True),
                      help="Seconds to reach the --dask scheduler (default 10)."),
     ] = None,
     dask_progress_timeout: Annotated[
         float | None,
         typer.Option("--dask-progress-timeout", metavar="S",
+                     parser=bounded_float("--dask-progress-timeout", 0.0, 86400.0,
+                                          open_low=True),
                      help="Stop with an error when no chunk finishes for S seconds "
                           "(default 120)."),
     ] = None,

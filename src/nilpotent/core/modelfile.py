@@ -32,11 +32,8 @@ positions are 0-based, field numbers ``X1, X2, ...`` 1-based) and the text.
 
 from __future__ import annotations
 
-import json
 import keyword
 import math
-import stat
-import tomllib
 import unicodedata
 from collections.abc import Mapping
 from pathlib import Path
@@ -44,6 +41,13 @@ from typing import Any
 
 import sympy as sp
 
+from nilpotent.core.datafile import (  # noqa: F401  (re-exported: the limits of a file)
+    MAX_FILE_BYTES,
+    MAX_INT_DIGITS,
+    SUFFIXES,
+    file_suffix,
+    read_data_file,
+)
 from nilpotent.core.expressions import (
     MAX_BITS,
     RESERVED_NAMES,
@@ -71,11 +75,6 @@ __all__ = [
 ALLOWED_KEYS: tuple[str, ...] = (
     "name", "description", "coordinates", "parameters", "fields", "limits", "geometry",
 )
-#: File suffixes understood by :func:`load_model_file` and :func:`dump_model_file`.
-SUFFIXES: tuple[str, ...] = (".toml", ".json")
-
-#: Largest model file read, in bytes.
-MAX_FILE_BYTES = 1_000_000
 #: Most coordinates of a model file.
 MAX_COORDINATES = 40
 #: Most control fields of a model file.
@@ -87,8 +86,6 @@ MAX_NAME_LENGTH = 64
 #: Longest model name and description, in characters.
 MAX_TITLE_LENGTH = 200
 MAX_DESCRIPTION_LENGTH = 2000
-#: Most decimal digits of an integer written as a number (not as text) in a model file.
-MAX_INT_DIGITS = 1000
 
 
 def _limit(source: str, what: str, count: int, limit: int, name: str) -> None:
@@ -479,16 +476,6 @@ def system_to_dict(sys: ControlSystem) -> dict[str, Any]:
     return out
 
 
-def _suffix(path: Path) -> str:
-    suffix = path.suffix.lower()
-    if suffix not in SUFFIXES:
-        raise ModelError(
-            f"{path}: unknown model file type {path.suffix or '(no suffix)'!r} "
-            f"(use {' or '.join(SUFFIXES)})"
-        )
-    return suffix
-
-
 def load_model_file(path: str | Path) -> ControlSystem:
     """Read a model file (``.toml`` or ``.json``) into a :class:`ControlSystem`.
 
@@ -502,103 +489,17 @@ def load_model_file(path: str | Path) -> ControlSystem:
     Raises
     ------
     ModelError
-        Unknown suffix, unreadable file, syntax error (with its line), or any
+        Unknown suffix, unreadable or non-regular file, syntax error (with its line),
+        a duplicate JSON key (:func:`nilpotent.core.datafile.read_data_file`), or any
         problem :func:`system_from_dict` reports.
+    ComputationLimitError
+        A file larger than :data:`nilpotent.core.datafile.MAX_FILE_BYTES`.
     ExpressionError
         A component outside the expression grammar.
     """
     path = Path(path)
-    text = _read_model_text(path)
-    suffix = _suffix(path)
-    if suffix == ".toml":
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ModelError(f"{path}: TOML syntax error: {exc}") from None
-        except ValueError as exc:  # e.g. an integer past Python's 4300-digit limit
-            raise ModelError(f"{path}: TOML value not readable: {_show(str(exc))}") from None
-    else:
-        try:
-            data = json.loads(text, object_pairs_hook=_no_duplicates(path),
-                              parse_int=_json_int(path))
-        except json.JSONDecodeError as exc:
-            raise ModelError(
-                f"{path}: JSON syntax error: {exc.msg} (line {exc.lineno}, column {exc.colno})"
-            ) from None
-        except RecursionError:
-            raise ModelError(f"{path}: JSON nested too deeply") from None
+    data = read_data_file(path, "model file", ModelError)
     return system_from_dict(data, str(path), default_name=path.stem)
-
-
-def _describe_kind(mode: int) -> str | None:
-    """What a non-regular file is, in words (None for a regular file)."""
-    if stat.S_ISREG(mode):
-        return None
-    if stat.S_ISDIR(mode):
-        return "a folder"
-    if stat.S_ISFIFO(mode):
-        return "a named pipe (FIFO)"
-    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
-        return "a device"
-    if stat.S_ISSOCK(mode):
-        return "a socket"
-    return "not a regular file"
-
-
-def _read_model_text(path: Path) -> str:
-    """The text of a model file: a regular file of at most :data:`MAX_FILE_BYTES`, UTF-8,
-    a leading byte-order mark skipped. Never blocks on a FIFO or reads a device."""
-    try:
-        info = path.stat()
-    except FileNotFoundError:
-        raise ModelError(f"{path}: model file not found") from None
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read the model file ({exc.strerror})") from None
-    kind = _describe_kind(info.st_mode)
-    if kind is not None:
-        raise ModelError(f"{path} is {kind}, not a model file (give a .toml or .json file)")
-    _limit(str(path), "bytes", info.st_size, MAX_FILE_BYTES, "MAX_FILE_BYTES")
-    try:
-        with path.open("rb") as handle:
-            raw = handle.read(MAX_FILE_BYTES + 1)
-    except OSError as exc:
-        raise ModelError(f"{path}: cannot read the model file ({exc.strerror})") from None
-    _limit(str(path), "bytes", len(raw), MAX_FILE_BYTES, "MAX_FILE_BYTES")
-    if raw.startswith(b"\xef\xbb\xbf"):
-        raw = raw[3:]  # a UTF-8 byte-order mark (some Windows editors write one): read past it
-    elif raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        raise ModelError(f"{path}: UTF-16 text (byte-order mark); save the file as UTF-8")
-    try:
-        return raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ModelError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-
-
-def _no_duplicates(path: Path):
-    def hook(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-        out: dict[str, Any] = {}
-        for key, value in pairs:
-            if key in out:
-                raise ModelError(
-                    f"{path}: duplicate key {_show(key)} in one JSON object (each key once; "
-                    "TOML refuses this too)"
-                )
-            out[key] = value
-        return out
-
-    return hook
-
-
-def _json_int(path: Path):
-    def parse(text: str) -> int:
-        if len(text.lstrip("-")) > MAX_INT_DIGITS:
-            raise ModelError(
-                f"{path}: an integer of {len(text.lstrip('-')):,} digits, too long (at most "
-                f"{MAX_INT_DIGITS})"
-            )
-        return int(text)
-
-    return parse
 
 
 # --- writing -------------------------------------------------------------------------
@@ -673,7 +574,7 @@ def dump_model_file(sys: ControlSystem, path: str | Path) -> None:
         A component the grammar cannot write.
     """
     path = Path(path)
-    suffix = _suffix(path)
+    suffix = file_suffix(path, "model file", ModelError)
     data = system_to_dict(sys)
     text = _to_toml(data) if suffix == ".toml" else json_text(data)
     try:

@@ -121,7 +121,10 @@ class Outline:
     Raises
     ------
     ModelError
-        A polygon with fewer than 3 points, or an empty outline.
+        A polygon with fewer than 3 points, an empty outline, or a disc whose radius
+        is a constant that is negative or not finite (a radius that depends on the
+        configuration is checked where it is evaluated,
+        :class:`nilpotent.planning.robot.Robot`).
     """
 
     polygons: tuple[tuple[Point2, ...], ...] = ()
@@ -134,6 +137,17 @@ class Outline:
                 raise ModelError(f"geometry.polygons[{i}] needs at least 3 points, got {len(poly)}")
         if not (self.polygons or self.segments or self.discs):
             raise ModelError("geometry: the outline is empty (give polygons, segments or discs)")
+        for i, (_, radius) in enumerate(self.discs):
+            r = as_expr(radius)
+            if r.free_symbols:
+                continue
+            try:
+                value = float(r)
+            except (TypeError, ValueError, OverflowError):
+                value = math.nan
+            if not (math.isfinite(value) and value >= 0):
+                raise ModelError(
+                    f"geometry.discs[{i}].radius = {r}: a radius must be a finite number >= 0")
 
     def expressions(self) -> tuple[sp.Expr, ...]:
         """Every expression of the outline, in a fixed order (polygons, segments, discs)."""
@@ -145,6 +159,20 @@ class Outline:
             out.extend((*a, *b))
         for c, rad in self.discs:
             out.extend((*c, rad))
+        return tuple(out)
+
+    def labels(self) -> tuple[str, ...]:
+        """Where each of :meth:`expressions` stands in the ``[geometry]`` table, same order
+        (``geometry.discs[0].radius``, ``geometry.polygons[1].points[2][0]``, ...)."""
+        out: list[str] = []
+        for i, poly in enumerate(self.polygons):
+            for j in range(len(poly)):
+                out += [f"geometry.polygons[{i}].points[{j}][{c}]" for c in (0, 1)]
+        for i in range(len(self.segments)):
+            out += [f"geometry.segments[{i}].{end}[{c}]" for end in ("from", "to") for c in (0, 1)]
+        for i in range(len(self.discs)):
+            out += [f"geometry.discs[{i}].center[0]", f"geometry.discs[{i}].center[1]",
+                    f"geometry.discs[{i}].radius"]
         return tuple(out)
 
     def free_names(self) -> set[str]:

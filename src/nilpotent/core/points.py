@@ -6,12 +6,20 @@ the unnamed ones are 0.  Values go through the expression grammar
 and ``E``, so they are constants: exact where written exactly (``pi/3``,
 ``1/2``, ``sqrt(2)``); decimals are read as the exact rationals they denote
 (``0.7`` is ``7/10``, ``1e-300`` is ``10**-300``).  They must be finite real
-numbers.  Commas inside parentheses (``atan2(1, 2)``) belong to
-the value.
+numbers; a point's coordinates are of magnitude at most :data:`MAX_MAGNITUDE`
+(``1e6``; a bigger coordinate is refused with a clear error: no numerical
+computation of the tool is meaningful at that scale, and doubles lose the small
+terms).  Parameters (``--param``) may be any finite double.
+Commas inside parentheses (``atan2(1, 2)``) belong to the value.  A name may
+appear once per option (``x=1,x=2`` is refused, not "the last one wins").
+
+:func:`check_magnitude` is the one check of every number given at the boundary
+(command-line options, world files): finite, and within the documented range.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 
@@ -20,9 +28,68 @@ import sympy as sp
 from nilpotent.core.expressions import format_expression, parse_expression, real_value
 from nilpotent.core.spans import exact_decimals
 from nilpotent.core.system import ControlSystem
-from nilpotent.errors import ExpressionError, ModelError, NilpotentError, PointError
+from nilpotent.errors import ExpressionError, ModelError, NilpotentError, OptionError, PointError
 
-__all__ = ["format_point", "parse_param_assignments", "parse_point"]
+__all__ = [
+    "MAX_MAGNITUDE",
+    "check_magnitude",
+    "format_point",
+    "parse_assignments",
+    "parse_param_assignments",
+    "parse_point",
+]
+
+#: Largest magnitude of a number given by a user: a coordinate of a point, a parameter,
+#: a length, a time, a bound of a world (model units, radians, seconds).
+MAX_MAGNITUDE = 1e6
+
+
+def check_magnitude(
+    value: float,
+    where: str,
+    *,
+    low: float = -MAX_MAGNITUDE,
+    high: float = MAX_MAGNITUDE,
+    error: type[NilpotentError] = OptionError,
+) -> float:
+    """``value`` as a float if it is finite and in ``[low, high]``, else ``error``.
+
+    Parameters
+    ----------
+    value : float
+        The number (anything :class:`float` takes; ``int`` of any size included).
+    where : str
+        What the number is (an option, a file's key), put at the start of the message.
+    low, high : float
+        The closed range allowed (default ``±MAX_MAGNITUDE``).
+    error : type of NilpotentError
+        The error raised (default :class:`~nilpotent.errors.OptionError`).
+
+    Returns
+    -------
+    float
+        The value.
+
+    Raises
+    ------
+    NilpotentError
+        ``error``: not finite, beyond the range of a double, or outside ``[low, high]``.
+
+    Examples
+    --------
+    >>> check_magnitude(2.5, "--tol")
+    2.5
+    """
+    try:
+        number = float(value)
+    except OverflowError:
+        raise error(f"{where}: the number is beyond the range of a double (allowed: "
+                    f"{low:g} to {high:g})") from None
+    if not math.isfinite(number):
+        raise error(f"{where}: expected a finite number, got {number}")
+    if not low <= number <= high:
+        raise error(f"{where}: {number!r} is outside the allowed range [{low:g}, {high:g}]")
+    return number
 
 
 def _split_top_level(text: str) -> list[str]:
@@ -40,10 +107,41 @@ def _split_top_level(text: str) -> list[str]:
     return parts
 
 
-def _assignments(
-    text: str, where: str, error: type[NilpotentError], example: str
+def parse_assignments(
+    text: str, where: str, error: type[NilpotentError], example: str,
+    limit: float | None = MAX_MAGNITUDE,
 ) -> list[tuple[str, sp.Expr]]:
-    """Parse ``NAME=VALUE,...`` into (name, constant value) pairs, in order."""
+    """Parse ``NAME=VALUE,...`` into (name, constant value) pairs, in order.
+
+    The one parser of every ``NAME=VALUE,...`` option (points, ``--param``,
+    ``--mismatch``): each value a finite real constant of the grammar of
+    magnitude at most ``limit`` (:data:`MAX_MAGNITUDE`; ``None``: any double, as
+    for parameters, whose scale the exact commands handle), each name once.
+
+    Parameters
+    ----------
+    text : str
+        The option's value.
+    where : str
+        The option's name, put at the start of messages.
+    error : type of NilpotentError
+        The error raised for a malformed text.
+    example : str
+        A well-formed example, shown in messages.
+    limit : float or None
+        The largest magnitude allowed (``None``: any finite double).
+
+    Returns
+    -------
+    list of (str, sympy.Expr)
+        The names and their exact values, in order.
+
+    Raises
+    ------
+    NilpotentError
+        ``error``: an empty text or item, an item without ``=``, an empty name or value, a
+        name given twice, a value that is not a finite real constant or is too large.
+    """
     if not isinstance(text, str) or not text.strip():
         raise error(f"{where}: empty; write NAME=VALUE pairs separated by commas, e.g. {example}")
     out: list[tuple[str, sp.Expr]] = []
@@ -66,7 +164,9 @@ def _assignments(
         place = f"{where} {name}"
         try:
             expr = parse_expression(value, {}, where=place)
-            real_value(expr, where=place)
+            number = real_value(expr, where=place)  # finite, within a double
+            if limit is not None:
+                check_magnitude(number, place, low=-limit, high=limit, error=error)
         except ExpressionError as exc:
             raise error(str(exc)) from None
         out.append((name, _exact_decimal_value(value, expr)))
@@ -125,7 +225,7 @@ def parse_point(text: str, sys: ControlSystem, *, option: str = "--at") -> tuple
     names = sys.coordinate_names
     example = f"{option} {names[0]}=1/2" + (f",{names[-1]}=pi/4" if len(names) > 1 else "")
     values: dict[str, sp.Expr] = dict.fromkeys(names, sp.Integer(0))
-    for name, expr in _assignments(text, option, PointError, example):
+    for name, expr in parse_assignments(text, option, PointError, example):
         if name not in values:
             raise PointError(
                 f"{option}: unknown coordinate {name!r} in {text!r} "
@@ -159,7 +259,10 @@ def parse_param_assignments(
         items = [items]
     out: dict[str, sp.Expr] = {}
     for item in items:
-        for name, expr in _assignments(item, option, ModelError, f"{option} r=1/2"):
+        # parameters: any finite double (exact commands are scale-invariant: l = 1e300
+        # is a valid trident); the commands that compute in floats check what they use
+        for name, expr in parse_assignments(item, option, ModelError, f"{option} r=1/2",
+                                            limit=None):
             if not name.isidentifier():
                 raise ModelError(f"{option}: {name!r} in {item!r} is not a parameter name")
             if name in out:

@@ -73,8 +73,11 @@ __all__ = [
     "wheel_slip",
 ]
 
-#: Largest ``K`` accepted in ``car-trailers:K`` (the symbolic work grows quickly with K).
-MAX_TRAILERS = 50
+#: Largest ``K`` accepted in ``car-trailers:K``: the brackets up to length K + 2 are
+#: needed at every point, and each trailer multiplies their cost by 5-8 (``analyze`` at the
+#: origin: K = 9 in 5.4 s of CPU and 0.26 GB, K = 10 in 46 s and 0.76 GB, K = 11 past the
+#: minutes a command may take; measured 2026-12-01, docs/models.md).
+MAX_TRAILERS = 9
 
 _MODEL_FILE_SUFFIXES = (".toml", ".json")
 
@@ -250,10 +253,14 @@ def _parse_argument(spec: str, info: ModelInfo, text: str) -> int:
             f"model {spec!r}: {info.argument} must be a positive integer "
             f"(e.g. {info.example_spec}), got {text!r}"
         )
-    value = int(text)
+    digits = text.strip().lstrip("0")
+    value = int(digits or "0") if len(digits) <= 6 else MAX_TRAILERS + 1  # no 4300-digit limit
     if value < 1 or value > MAX_TRAILERS:
+        shown = text.strip() if len(text.strip()) <= 20 else f"{text.strip()[:20]}..."
         raise ModelError(
-            f"model {spec!r}: {info.argument} must be between 1 and {MAX_TRAILERS}, got {value}"
+            f"model {spec[:60]!r}: {info.argument} must be between 1 and {MAX_TRAILERS}, got "
+            f"{shown} (each trailer multiplies the symbolic work by 5-8: "
+            f"K = {MAX_TRAILERS} takes seconds, K = {MAX_TRAILERS + 1} about a minute)"
         )
     return value
 
