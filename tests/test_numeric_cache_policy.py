@@ -29,7 +29,7 @@ from nilpotent.numeric import cache as code_cache
 
 heyoka = pytest.importorskip("heyoka")
 
-from nilpotent.numeric.engines import heyoka_engine  # noqa: E402  (needs heyoka)
+from nilpotent.numeric.engines import heyoka_engine, heyoka_setup  # noqa: E402  (needs heyoka)
 
 ROLLER = textwrap.dedent("""\
     name = "{name}"
@@ -136,7 +136,7 @@ def test_object_code_planted_in_heyokas_default_cache_is_never_loaded(tmp_path):
 
 def _fresh_heyoka_state(monkeypatch: pytest.MonkeyPatch, folder: Path) -> None:
     monkeypatch.setenv("NILPOTENT_CACHE", str(folder))
-    monkeypatch.setattr(heyoka_engine, "_state", {"quiet": True})
+    monkeypatch.setattr(heyoka_setup, "_state", {"quiet": True})
 
 
 @pytest.mark.parametrize("defect", ["mode", "symlink", "owner"])
@@ -147,7 +147,7 @@ def test_an_unsafe_heyoka_folder_is_refused_and_its_cache_switched_off(
     folder = cache / "heyoka"
     folder.mkdir(mode=0o700)
     _fresh_heyoka_state(monkeypatch, cache)
-    assert heyoka_engine.use_safe_disk_cache(heyoka) == folder  # safe: used
+    assert heyoka_setup.use_safe_disk_cache(heyoka) == folder  # safe: used
     assert heyoka.llvm_state.get_diskcache_enabled()
     assert Path(str(heyoka.llvm_state.get_diskcache_path())) == folder
     if defect == "mode":
@@ -172,7 +172,7 @@ def test_an_unsafe_heyoka_folder_is_refused_and_its_cache_switched_off(
         monkeypatch.setattr(os, "lstat", lstat)
         reason = "owned by another user"
     with pytest.warns(RuntimeWarning, match=f"heyoka's disk cache is off: .*{reason}"):
-        assert heyoka_engine.use_safe_disk_cache(heyoka) is None
+        assert heyoka_setup.use_safe_disk_cache(heyoka) is None
     assert not heyoka.llvm_state.get_diskcache_enabled()
     assert code_cache.library_cache("heyoka")[0] is None
 
@@ -184,7 +184,7 @@ def test_an_unusable_code_cache_switches_heyokas_disk_cache_off(tmp_path, monkey
     _fresh_heyoka_state(monkeypatch, cache)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # cache_dir's own warning, and heyoka's
-        assert heyoka_engine.use_safe_disk_cache(heyoka) is None
+        assert heyoka_setup.use_safe_disk_cache(heyoka) is None
     assert not heyoka.llvm_state.get_diskcache_enabled()
     assert not (cache / "heyoka").exists()
 
@@ -194,7 +194,7 @@ _NOISY = textwrap.dedent("""\
     import os, sys
     import numpy as np, sympy as sp
     from nilpotent.numeric import bracket_inputs, compile_fields, integrate
-    from nilpotent.numeric.engines import heyoka_engine
+    from nilpotent.numeric.engines import heyoka_engine, heyoka_setup
     def broken(hy):  # heyoka pointed at a folder it cannot use: it logs warnings
         hy.llvm_state.set_diskcache_path(sys.argv[1] + "/heyoka")
         hy.llvm_state.set_diskcache_enabled(True)
@@ -202,7 +202,7 @@ _NOISY = textwrap.dedent("""\
     x, y, t = sp.symbols("x y t")
     s = compile_fields((x, y, t), [(sp.cos(t), sp.sin(t), 0), (0, 0, 1)])
     integrate(s, np.zeros((1, 3)), bracket_inputs(2, 1, 2, [0.2]), engine="heyoka")
-    with heyoka_engine._stdout_to_stderr():
+    with heyoka_setup.stdout_to_stderr():
         os.write(1, b"native text\\n")
     print('{"only": "this"}')
 """)

@@ -76,24 +76,20 @@ integrators built.
 heyoka logs through spdlog on stdout: its level is set to ``critical`` and the
 construction of an integrator (where its cache is read and written) runs with
 file descriptor 1 pointed at stderr, so nothing of heyoka's reaches stdout (one
-JSON object under ``--json``).
+JSON object under ``--json``).  Both, and the disk-cache policy, live in
+:mod:`nilpotent.numeric.engines.heyoka_setup`.
 """
 
 from __future__ import annotations
 
-import contextlib
 import copy
 import importlib.util
 import itertools
 import os
-import sys
-import threading
-import warnings
 from collections import Counter
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import ModuleType
 from typing import Any, ClassVar
 
@@ -101,10 +97,14 @@ import numpy as np
 import sympy as sp
 
 from nilpotent.errors import MissingExtraError
-from nilpotent.numeric.cache import library_cache
 from nilpotent.numeric.compile import CompiledSystem
 from nilpotent.numeric.engines import Engine, EngineOutput
 from nilpotent.numeric.engines.heyoka_events import run_chunk
+from nilpotent.numeric.engines.heyoka_setup import (
+    quiet_logger,
+    stdout_to_stderr,
+    use_safe_disk_cache,
+)
 from nilpotent.numeric.signals import Signal
 
 #: How to install the optional dependency.
@@ -151,73 +151,14 @@ def heyoka_available() -> bool:
 #: Integrators built (compiled or loaded from heyoka's disk cache) in this process.
 COMPILATIONS: Counter[str] = Counter()
 
-_state: dict[str, Any] = {}  # "quiet": logger set; "folder": the disk cache in use
-_stdout_lock = threading.Lock()
-
 
 def _heyoka() -> ModuleType:
     if not heyoka_available():
         raise MissingExtraError(f"the heyoka engine needs heyoka: {INSTALL_HINT}")
     import heyoka
 
-    if "quiet" not in _state:
-        heyoka.set_logger_level_critical()  # its warnings went to stdout
-        _state["quiet"] = True
+    quiet_logger(heyoka)
     return heyoka
-
-
-def use_safe_disk_cache(hy: ModuleType) -> Path | None:
-    """Point heyoka's on-disk cache at the checked folder, or switch it off; returns it.
-
-    The folder is :func:`~nilpotent.numeric.cache.library_cache` ``("heyoka")``,
-    checked on every call (before each compilation); heyoka's own default
-    folder is never used.  When no folder is safe the disk cache is off and a
-    ``RuntimeWarning`` (once per reason) says why.
-    """
-    folder, why = library_cache("heyoka")
-    llvm = hy.llvm_state
-    if folder is None:
-        if llvm.get_diskcache_enabled():
-            llvm.set_diskcache_enabled(False)
-        if why and _state.get("warned") != why:
-            _state["warned"] = why
-            warnings.warn(
-                f"nilpotent: heyoka's disk cache is off: {why}; integrators are compiled "
-                "in every process. Fix: remove that folder (it is made again, 0700), or "
-                "set NILPOTENT_CACHE to a folder of your own",
-                RuntimeWarning, stacklevel=3,
-            )
-    else:
-        if _state.get("folder") != folder or Path(llvm.get_diskcache_path()) != folder:
-            llvm.set_diskcache_path(str(folder))
-        if not llvm.get_diskcache_enabled():
-            llvm.set_diskcache_enabled(True)
-    _state["folder"] = folder
-    return folder
-
-
-@contextlib.contextmanager
-def _stdout_to_stderr() -> Iterator[None]:
-    """Run with file descriptor 1 pointed at stderr (a native library's prints leave stdout)."""
-    with _stdout_lock:
-        try:
-            sys.stdout.flush()
-            saved = os.dup(1)
-        except (OSError, ValueError, AttributeError):  # no usable fd 1: nothing to protect
-            yield
-            return
-        try:
-            os.dup2(2, 1)
-        except OSError:
-            os.close(saved)
-            yield
-            return
-        try:
-            yield
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
-
 
 def heyoka_tolerance(rtol: float, atol: float) -> float:
     """heyoka's tolerance for ``rtol``, ``atol``: ``min(rtol, atol)`` (``rtol`` if ``atol = 0``)."""
@@ -362,7 +303,9 @@ def taylor_integrator(
     ``used``: which runtime parameters may be nonzero (:func:`_rhs`; ``None``:
     all); ``frozen``: coordinates held constant (read as parameters).
     Compiled on the first call (LLVM, in memory; heyoka's on-disk cache in the
-    checked folder of :func:`use_safe_disk_cache` across processes), then kept
+    checked folder of
+    :func:`~nilpotent.numeric.engines.heyoka_setup.use_safe_disk_cache` across
+    processes), then kept
     in the system's memo (shared by every system with the same key).
     """
     key = ("heyoka", int(harmonics), float(tol), used, tuple(frozen))
@@ -371,7 +314,7 @@ def taylor_integrator(
         hy = _heyoka()
         sysd, _ = _rhs(system, int(harmonics), used, tuple(frozen))
         bs = int(hy.recommended_simd_size())
-        with _stdout_to_stderr():
+        with stdout_to_stderr():
             use_safe_disk_cache(hy)
             # heyoka sizes the parameters by the largest index the expressions use
             ta = hy.taylor_adaptive_batch(sysd, np.zeros((len(sysd), bs)), tol=float(tol))
