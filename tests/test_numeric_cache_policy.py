@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
+from nilpotent.errors import OptionError
 from nilpotent.numeric import bracket_inputs, compile_fields, integrate
 from nilpotent.numeric import cache as code_cache
 
@@ -292,3 +293,15 @@ def test_a_renamed_model_compiles_nothing_in_a_new_process(tmp_path):
     assert rows[0] > 0 and rows[1] == rows[0]  # heyoka found everything in its cache
     assert listing[1] == listing[0]  # no new generated file
     assert outputs[1]["errors"] == outputs[0]["errors"]
+
+
+# --- fields heyoka cannot express ---------------------------------------------------------
+def test_auto_skips_heyoka_for_fields_it_cannot_express_and_heyoka_says_so():
+    a, b = sp.symbols("a b")
+    system = compile_fields((a, b), [(1, 0), (0, sp.Abs(a - 1))], name="kinked")
+    inputs = bracket_inputs(2, 1, 2, [0.1], periods=3)
+    start = np.array([[2.0, 0.0]])
+    sol = integrate(system, start, inputs)  # long inputs: auto prefers heyoka, if it can
+    assert sol.engine != "heyoka" and sol.all_ok
+    with pytest.raises(OptionError, match="heyoka engine cannot integrate kinked"):
+        integrate(system, start, inputs, engine="heyoka")

@@ -37,6 +37,10 @@ Class attributes
     Whether its dependencies import; an engine that is asked for but not
     available raises :class:`~nilpotent.errors.MissingExtraError` naming the install.
 
+``handles(system)``
+    Whether it can express the system's fields at all (default ``True``; heyoka
+    has no ``Abs``): ``"auto"`` never picks an engine that cannot.
+
 ``solve(system, xs, signal, times, *, adaptive, steps, rtol, atol, max_steps,
 min_step, bound, threads)``
     Inputs, all already validated by ``integrate``: ``system`` a
@@ -134,6 +138,11 @@ class Engine(abc.ABC):
         del system
         return True
 
+    def handles(self, system: Any) -> bool:
+        """Whether the engine can integrate ``system``'s fields (else ``"auto"`` skips it)."""
+        del system
+        return True
+
     def require(self) -> None:
         """Raise :class:`MissingExtraError` (naming the install) if not :meth:`available`."""
         if not self.available():
@@ -227,7 +236,8 @@ def choose_engine(
 ) -> Engine:
     """The engine that ``engine`` (a name or ``"auto"``) means for ``method`` and ``batch``.
 
-    ``"auto"``: for the adaptive method, ``heyoka`` when heyoka is installed and
+    ``"auto"``: for the adaptive method, ``heyoka`` when heyoka is installed,
+    can express the fields (:meth:`Engine.handles`: not ``Abs``, for one) and
     the batch has at least :data:`AUTO_NUMBA_BATCH` trajectories or ``cycles``
     (how many periods of its fastest harmonic the longest control runs through;
     ``None``: not known) is at least :data:`HEYOKA_MIN_CYCLES`; otherwise
@@ -255,9 +265,10 @@ def choose_engine(
     if engine == "auto":
         numba = ENGINES["numba"]
         long_inputs = cycles is not None and cycles >= HEYOKA_MIN_CYCLES
+        heyoka = ENGINES["heyoka"]
         if (method == "adaptive" and (batch >= AUTO_NUMBA_BATCH or long_inputs)
-                and ENGINES["heyoka"].available()):
-            return ENGINES["heyoka"]
+                and heyoka.available() and heyoka.handles(system)):
+            return heyoka
         if numba.available() and (batch >= AUTO_NUMBA_BATCH or numba.cached(system)):
             return numba
         return ENGINES["scipy" if method == "adaptive" else "numpy"]

@@ -96,7 +96,7 @@ from typing import Any, ClassVar
 import numpy as np
 import sympy as sp
 
-from nilpotent.errors import MissingExtraError
+from nilpotent.errors import MissingExtraError, OptionError
 from nilpotent.numeric.compile import CompiledSystem
 from nilpotent.numeric.engines import Engine, EngineOutput
 from nilpotent.numeric.engines.heyoka_events import run_chunk
@@ -121,6 +121,10 @@ class HeyokaEngine(Engine):
 
     def available(self) -> bool:
         return heyoka_available()
+
+    def handles(self, system: Any) -> bool:
+        """Whether heyoka can express every field of ``system`` (:func:`heyoka_handles`)."""
+        return heyoka_handles(system)
 
     def solve(
         self,
@@ -159,6 +163,40 @@ def _heyoka() -> ModuleType:
 
     quiet_logger(heyoka)
     return heyoka
+
+def _convert(hy: ModuleType, system: CompiledSystem, f: sp.Expr, smap: dict) -> Any:
+    """``f`` as a heyoka expression; :class:`OptionError` for what heyoka cannot express."""
+    try:
+        return hy.from_sympy(f, smap)
+    except (TypeError, ValueError) as exc:
+        raise OptionError(
+            f"the heyoka engine cannot integrate {system.name}: {exc} (use engine "
+            "'scipy' or 'numba')"
+        ) from None
+
+
+def heyoka_handles(system: CompiledSystem) -> bool:
+    """Whether heyoka can express every field of ``system`` (``from_sympy``: not ``Abs``).
+
+    Kept in the system's memo.
+    """
+    memo = system._memo
+    if "heyoka-handles" not in memo:
+        hy = _heyoka()
+        names = [f"q{k}" for k in range(system.n)]
+        hv = hy.make_vars(*names)
+        hv = list(hv) if system.n > 1 else [hv]
+        smap = dict(zip(sp.symbols(f"q0:{system.n}", real=True), hv, strict=True))
+        try:
+            for row in system.fields:
+                for f in row:
+                    if f not in (0, 1):
+                        _convert(hy, system, f, smap)
+            memo["heyoka-handles"] = True
+        except OptionError:
+            memo["heyoka-handles"] = False
+    return bool(memo["heyoka-handles"])
+
 
 def heyoka_tolerance(rtol: float, atol: float) -> float:
     """heyoka's tolerance for ``rtol``, ``atol``: ``min(rtol, atol)`` (``rtol`` if ``atol = 0``)."""
@@ -278,7 +316,7 @@ def _rhs(
             f = system.fields[i][j]
             if f == 0 or inputs[i] is None:
                 continue
-            terms.append(inputs[i] if f == 1 else inputs[i] * hy.from_sympy(f, smap))
+            terms.append(inputs[i] if f == 1 else inputs[i] * _convert(hy, system, f, smap))
         rhs.append(hy.sum(terms) if terms else hy.expression(0.0))
     return list(zip(hv, rhs, strict=True)), len(slots) + len(frozen)
 
