@@ -1,0 +1,201 @@
+"""Apply the module moves of ``tools/core_moves.txt`` to a tree (idempotent).
+
+Usage::
+
+    python tools/apply_core_moves.py [ROOT] [--map FILE] [--dry-run]
+
+``ROOT`` defaults to the repository this script lives in.  Three passes:
+
+1. **Files.**  A module of the map still at its old path (``src/nilpotent/core/x.py``,
+   e.g. brought back by a merge of a branch that edited or created it there) is moved
+   to its new path with ``git mv`` (plain rename outside git).  Where both exist the
+   script stops and names them: merge the two by hand first.
+2. **Module paths.**  Every ``nilpotent.a.b`` of the map is replaced, as a whole
+   dotted name, in ``.py``, ``.md``, ``.ipynb``, ``.yml``/``.yaml``, ``.toml`` and
+   ``.txt`` files under ``src``, ``tests``, ``docs``, ``examples``, ``benchmarks``
+   and in ``mkdocs.yml``/``README.md`` (import statements, ``import x as y``,
+   monkeypatch strings, ``:mod:`` references, mkdocstrings' ``:::``); and
+   ``from nilpotent.core import filtration`` becomes
+   ``from nilpotent.core.analysis import filtration``.
+3. **Names.**  A line ``old.module:name new.module:new_name`` of the map moves a
+   name: in ``.py`` files, ``from old.module import name`` is split so that the name
+   comes from ``new.module``; when ``new_name`` differs, the name is renamed (as a
+   whole word) in the files that import it and in the module that defines it.
+
+Run ``ruff check --fix --select I`` afterwards to sort the rewritten imports.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+TEXT_SUFFIXES = {".py", ".md", ".ipynb", ".yml", ".yaml", ".toml", ".txt", ".cfg"}
+TREES = ("src", "tests", "docs", "examples", "benchmarks")
+TOP_FILES = ("mkdocs.yml", "README.md", "pyproject.toml")
+
+
+def read_map(path: Path) -> tuple[list[tuple[str, str]], list[tuple[str, str, str, str]]]:
+    """The module moves and the name moves of a map file (``#`` starts a comment)."""
+    modules: list[tuple[str, str]] = []
+    names: list[tuple[str, str, str, str]] = []
+    for k, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        parts = line.split()
+        if len(parts) != 2:
+            raise SystemExit(f"{path}:{k}: expected two fields, got {raw!r}")
+        old, new = parts
+        if ":" in old:
+            (om, on), (nm, nn) = old.split(":"), new.split(":")
+            names.append((om, on, nm, nn))
+        else:
+            modules.append((old, new))
+    return modules, names
+
+
+def module_file(root: Path, module: str) -> Path:
+    return root / "src" / Path(*module.split(".")).with_suffix(".py")
+
+
+def files(root: Path) -> list[Path]:
+    out = [root / f for f in TOP_FILES if (root / f).is_file()]
+    for tree in TREES:
+        base = root / tree
+        if base.is_dir():
+            out += sorted(
+                p for p in base.rglob("*")
+                if p.is_file() and p.suffix in TEXT_SUFFIXES and "__pycache__" not in p.parts
+                and "tools" not in p.relative_to(root).parts[:1]
+            )
+    return out
+
+
+def move_files(root: Path, modules: list[tuple[str, str]], dry: bool) -> list[str]:
+    done = []
+    for old, new in modules:
+        src, dst = module_file(root, old), module_file(root, new)
+        if not src.exists():
+            continue
+        if dst.exists():
+            raise SystemExit(f"both {src} and {dst} exist: merge them by hand, then re-run")
+        done.append(f"move {src.relative_to(root)} -> {dst.relative_to(root)}")
+        if dry:
+            continue
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        tracked = subprocess.run(
+            ["git", "-C", str(root), "ls-files", "--error-unmatch", str(src)],
+            capture_output=True,
+        ).returncode == 0
+        if tracked:
+            subprocess.run(["git", "-C", str(root), "mv", str(src), str(dst)], check=True)
+        else:
+            shutil.move(src, dst)
+    return done
+
+
+def rewrite_modules(text: str, modules: list[tuple[str, str]]) -> str:
+    for old, new in modules:
+        text = re.sub(rf"(?<![\w.]){re.escape(old)}(?![\w])", new, text)
+        parent, leaf = old.rsplit(".", 1)
+        new_parent, new_leaf = new.rsplit(".", 1)
+        # ``from nilpotent.core import filtration [as f]`` (alone on its statement)
+        text = re.sub(
+            rf"^(\s*)from {re.escape(parent)} import {re.escape(leaf)}\b(?! *,)(?=[ \t]*(as \w+)?[ \t]*$)",
+            rf"\1from {new_parent} import {new_leaf}",
+            text,
+            flags=re.M,
+        )
+    return text
+
+
+def _statement_text(indent: str, module: str, aliases: list[ast.alias]) -> str:
+    names = [a.name + (f" as {a.asname}" if a.asname else "") for a in aliases]
+    one = f"{indent}from {module} import {', '.join(names)}"
+    if len(one) <= 99:
+        return one
+    body = "".join(f"{indent}    {n},\n" for n in names)
+    return f"{indent}from {module} import (\n{body}{indent})"
+
+
+def rewrite_names(
+    text: str, names: list[tuple[str, str, str, str]]
+) -> tuple[str, set[tuple[str, str]]]:
+    """Split ``from old import name`` statements; returns the text and the renames it needs."""
+    try:
+        tree = ast.parse(text)
+    except SyntaxError:
+        return text, set()
+    moved = {(om, on): (nm, nn) for om, on, nm, nn in names}
+    lines = text.splitlines(keepends=True)
+    renames: set[tuple[str, str]] = set()
+    edits = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.ImportFrom) or node.level or not node.module:
+            continue
+        hits = [a for a in node.names if (node.module, a.name) in moved]
+        if not hits:
+            continue
+        indent = re.match(r"\s*", lines[node.lineno - 1]).group(0)
+        keep = [a for a in node.names if (node.module, a.name) not in moved]
+        groups: dict[str, list[ast.alias]] = {}
+        for a in hits:
+            nm, nn = moved[(node.module, a.name)]
+            if nn != a.name:
+                renames.add((a.name, nn))
+            groups.setdefault(nm, []).append(ast.alias(nn, a.asname))
+        stmts = [_statement_text(indent, node.module, keep)] if keep else []
+        stmts += [_statement_text(indent, m, al) for m, al in groups.items()]
+        edits.append((node.lineno, node.end_lineno or node.lineno, "\n".join(stmts) + "\n"))
+    for start, end, new in sorted(edits, reverse=True):
+        lines[start - 1 : end] = [new]
+    return "".join(lines), renames
+
+
+def rename_words(text: str, renames: set[tuple[str, str]]) -> str:
+    for old, new in renames:
+        text = re.sub(rf"(?<![\w.]){re.escape(old)}\b", new, text)
+    return text
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("root", nargs="?", default=str(HERE.parent))
+    parser.add_argument("--map", default=str(HERE / "core_moves.txt"))
+    parser.add_argument("--dry-run", action="store_true")
+    args = parser.parse_args(argv)
+    root = Path(args.root).resolve()
+    modules, names = read_map(Path(args.map))
+    report = move_files(root, modules, args.dry_run)
+    for path in files(root):
+        text = path.read_text(encoding="utf-8")
+        new = rewrite_modules(text, modules)
+        if path.suffix == ".py":
+            new, renames = rewrite_names(new, names)
+            new = rename_words(new, renames)
+        if new != text:
+            report.append(f"rewrite {path.relative_to(root)}")
+            if not args.dry_run:
+                path.write_text(new, encoding="utf-8")
+    # a renamed name, in the module that defines it
+    for _, on, nm, nn in names:
+        target = module_file(root, nm)
+        if on != nn and target.exists():
+            text = target.read_text(encoding="utf-8")
+            if re.search(rf"^(class|def) {re.escape(on)}\b|^{re.escape(on)} =", text, re.M):
+                report.append(f"rename {on} -> {nn} in {target.relative_to(root)}")
+                if not args.dry_run:
+                    target.write_text(rename_words(text, {(on, nn)}), encoding="utf-8")
+    print("\n".join(report) or "nothing to do")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
