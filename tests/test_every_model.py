@@ -19,7 +19,7 @@ import pytest
 import sympy as sp
 
 import nilpotent as nil
-from nilpotent.core.modelfile import dump_model_file
+from nilpotent.core.model.modelfile import dump_model_file
 from nilpotent.models import MODELS
 
 pytestmark = pytest.mark.every_model

@@ -173,7 +173,7 @@ def test_shooting_refinement_finishes_a_truncated_plan():
 
 
 def test_not_bracket_generating_is_reported():
-    from nilpotent.core.system import ControlSystem
+    from nilpotent.core.model.system import ControlSystem
     from nilpotent.errors import NotBracketGeneratingError
 
     x, y, z = sp.symbols("x y z")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from nilpotent.core.approximation import approximate
+from nilpotent.core.coordinates.approximation import approximate
 from nilpotent.errors import ModelError
 from nilpotent.models import get_model
 from nilpotent.numeric.compile import compile_map

@@ -27,31 +27,35 @@ from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from nilpotent.core.system import ControlSystem as ControlSystem
+from nilpotent.core.model.system import ControlSystem as ControlSystem
 from nilpotent.errors import NilpotentError as NilpotentError
 from nilpotent.version import __version__ as __version__
 
 if TYPE_CHECKING:
-    from nilpotent.core.approximation import Certificate as Certificate
-    from nilpotent.core.approximation import NilpotentApproximation as NilpotentApproximation
-    from nilpotent.core.approximation import approximate as approximate
-    from nilpotent.core.brackets import bracket as bracket
-    from nilpotent.core.brackets import format_word as format_word
-    from nilpotent.core.brackets import hall_basis as hall_basis
-    from nilpotent.core.brackets import word_field as word_field
-    from nilpotent.core.expressions import format_expression as format_expression
-    from nilpotent.core.expressions import parse_expression as parse_expression
-    from nilpotent.core.filtration import Filtration as Filtration
-    from nilpotent.core.filtration import analyze as analyze
-    from nilpotent.core.filtration import singular_locus as singular_locus
-    from nilpotent.core.modelfile import load_model_file as load_model_file
-    from nilpotent.core.modelfile import system_from_dict as system_from_dict
-    from nilpotent.core.orders import function_order as function_order
-    from nilpotent.core.outline import Limits as Limits
-    from nilpotent.core.outline import Outline as Outline
-    from nilpotent.core.points import parse_point as parse_point
-    from nilpotent.core.privileged import PrivilegedCoordinates as PrivilegedCoordinates
-    from nilpotent.core.privileged import privileged_coordinates as privileged_coordinates
+    from nilpotent.core.analysis.filtration import Filtration as Filtration
+    from nilpotent.core.analysis.filtration import analyze as analyze
+    from nilpotent.core.analysis.filtration import singular_locus as singular_locus
+    from nilpotent.core.coordinates.approximation import Certificate as Certificate
+    from nilpotent.core.coordinates.approximation import (
+        NilpotentApproximation as NilpotentApproximation,
+    )
+    from nilpotent.core.coordinates.approximation import approximate as approximate
+    from nilpotent.core.coordinates.orders import function_order as function_order
+    from nilpotent.core.coordinates.privileged import PrivilegedCoordinates as PrivilegedCoordinates
+    from nilpotent.core.coordinates.privileged import (
+        privileged_coordinates as privileged_coordinates,
+    )
+    from nilpotent.core.lie.brackets import bracket as bracket
+    from nilpotent.core.lie.brackets import format_word as format_word
+    from nilpotent.core.lie.brackets import hall_basis as hall_basis
+    from nilpotent.core.lie.brackets import word_field as word_field
+    from nilpotent.core.model.expressions import format_expression as format_expression
+    from nilpotent.core.model.expressions import parse_expression as parse_expression
+    from nilpotent.core.model.modelfile import load_model_file as load_model_file
+    from nilpotent.core.model.modelfile import system_from_dict as system_from_dict
+    from nilpotent.core.model.outline import Limits as Limits
+    from nilpotent.core.model.outline import Outline as Outline
+    from nilpotent.core.model.points import parse_point as parse_point
     from nilpotent.models import MODELS as MODELS
     from nilpotent.models import ModelInfo as ModelInfo
     from nilpotent.models import TridentGeometry as TridentGeometry

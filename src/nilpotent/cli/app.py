@@ -146,7 +146,7 @@ MAX_SEED = 2**63 - 1
 """Largest random seed (``--seed``)."""
 MAX_BRACKET_LENGTH = 64
 """Longest bracket length an option may ask for (``--max-length``); the Hall-word budget
-of :mod:`nilpotent.core.filtration` usually bounds it lower."""
+of :mod:`nilpotent.core.analysis.filtration` usually bounds it lower."""
 
 JsonOpt = Annotated[
     bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else.")
@@ -186,7 +186,7 @@ def work(description: str, total: int | None = None):
 
 def load_model_option(spec: str, params: list[str] | None):
     """Load MODEL (a built-in name or a model file) with ``--param`` assignments applied."""
-    from nilpotent.core.points import parse_param_assignments
+    from nilpotent.core.model.points import parse_param_assignments
     from nilpotent.models import load_system
 
     values = parse_param_assignments(list(params or []), option="--param")
@@ -195,7 +195,7 @@ def load_model_option(spec: str, params: list[str] | None):
 
 def parse_point_option(text: str | None, system, option: str = "--at"):
     """Parse a point option (``--at``, ``--from``, ``--to``); ``None`` means the origin."""
-    from nilpotent.core.points import parse_point
+    from nilpotent.core.model.points import parse_point
 
     if text is None:
         return system.origin()

@@ -57,7 +57,7 @@ CorrOpt = Annotated[
 
 def parse_mismatch(text: str | None) -> dict[str, float]:
     """``r=0.05,l=-0.05`` → ``{"r": 0.05, "l": -0.05}`` (values: expressions of the grammar)."""
-    from nilpotent.core.expressions import parse_expression, real_value
+    from nilpotent.core.model.expressions import parse_expression, real_value
 
     out: dict[str, float] = {}
     if not text:

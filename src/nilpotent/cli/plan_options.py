@@ -65,7 +65,7 @@ MaxPieceOpt = Annotated[
 
 def parse_limit_options(texts: list[str] | None, system) -> dict[str, tuple[float, float]]:
     """``--limit NAME=LO:HI`` (repeatable) → ``{name: (lo, hi)}``; LO, HI are expressions."""
-    from nilpotent.core.expressions import parse_expression, real_value
+    from nilpotent.core.model.expressions import parse_expression, real_value
 
     out: dict[str, tuple[float, float]] = {}
     for text in texts or []:

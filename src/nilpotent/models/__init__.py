@@ -30,8 +30,8 @@ from types import MappingProxyType
 
 import sympy as sp
 
-from nilpotent.core.expressions import format_expression
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.expressions import format_expression
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
 from nilpotent.models.outlines import with_builtin_constraints
@@ -84,7 +84,7 @@ class ModelInfo:
         Registry name (``"trident-snake"``, ``"car-trailers"``).
     build : Callable[..., ControlSystem]
         ``build()`` (or ``build(K)`` when :attr:`argument` is set) returns the
-        :class:`~nilpotent.core.system.ControlSystem` with its default
+        :class:`~nilpotent.core.model.system.ControlSystem` with its default
         parameter values.
     argument : str or None
         Name of the integer argument written after a colon (``"K"`` for
@@ -299,10 +299,10 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
     spec:
         A built-in spec (see :func:`get_model`) or a path to a model file in
         the ``INTERFACE.md`` format, read by
-        :func:`nilpotent.core.modelfile.load_model_file`.
+        :func:`nilpotent.core.model.modelfile.load_model_file`.
     params:
         Parameter values applied with
-        :meth:`~nilpotent.core.system.ControlSystem.with_parameters`.
+        :meth:`~nilpotent.core.model.system.ControlSystem.with_parameters`.
 
     Raises
     ------
@@ -322,7 +322,7 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
         )
     if problem is not None:
         raise ModelError(f"model file {_shown(spec)!r} {problem}")
-    from nilpotent.core.modelfile import load_model_file  # lazy: written alongside
+    from nilpotent.core.model.modelfile import load_model_file  # lazy: written alongside
 
     system = load_model_file(path)
     if params:

@@ -33,8 +33,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nilpotent.core.outline import Limits, Outline
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Limits, Outline
+from nilpotent.core.model.system import ControlSystem
 
 __all__ = [
     "CAR_SIZE",

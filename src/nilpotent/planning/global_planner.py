@@ -45,8 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.core.outline import Limits
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Limits
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import IntegrationError, PlanningError, SingularPointError
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment

@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NilpotentError, PlanningError, SingularPointError
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import (
@@ -421,7 +421,7 @@ def plan(
           first brackets span the space (step ≤ 2), else ``"start"``.
     builder:
         ``"numeric"`` (step ≤ 2, float linear adapted coordinates),
-        ``"symbolic"`` (:func:`nilpotent.core.approximation.approximate`,
+        ``"symbolic"`` (:func:`nilpotent.core.coordinates.approximation.approximate`,
         exact) or ``"auto"`` (numeric where possible).
     method:
         Nilpotent steering method (:data:`nilpotent.planning.nilpotent.METHODS`

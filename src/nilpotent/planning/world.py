@@ -35,7 +35,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
-from nilpotent.core.expressions import parse_expression, real_value
+from nilpotent.core.model.expressions import parse_expression, real_value
 from nilpotent.errors import ExpressionError, WorldError
 
 __all__ = ["World", "load_world", "world_from_dict"]

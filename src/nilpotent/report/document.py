@@ -18,7 +18,7 @@ from typing import Any
 
 import sympy as sp
 
-from nilpotent.core.expressions import parse_expression
+from nilpotent.core.model.expressions import parse_expression
 from nilpotent.errors import NilpotentError
 from nilpotent.models.trident import BODY_LEG_ANGLES, PAPER_LEG_ANGLES
 from nilpotent.report.audit import Audit

@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import sympy as sp
 
-    from nilpotent.core.approximation import NilpotentApproximation
-    from nilpotent.core.filtration import Filtration
-    from nilpotent.core.system import ControlSystem
+    from nilpotent.core.analysis.filtration import Filtration
+    from nilpotent.core.coordinates.approximation import NilpotentApproximation
+    from nilpotent.core.model.system import ControlSystem
     from nilpotent.report.audit import Audit
     from nilpotent.report.paper import PaperContent
     from nilpotent.simulate import Comparison, ScalingStudy

@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.points import format_point
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.points import format_point
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 from nilpotent.numeric.fits import loglog_slope
 from nilpotent.numeric.signals import bracket_signal, check_bracket

@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.integrate import METHODS
 from nilpotent.numeric.signals import bracket_inputs, check_bracket
@@ -168,7 +168,7 @@ def _run_chunk(chunk: _Chunk) -> dict[str, Any]:
 def _as_value(value: Any, where: str) -> sp.Expr:
     """A parameter value: sympy numbers and Python numbers as they are, text through the grammar."""
     if isinstance(value, str):
-        from nilpotent.core.expressions import parse_expression
+        from nilpotent.core.model.expressions import parse_expression
 
         expr = parse_expression(value, {}, where=where)
     elif isinstance(value, sp.Expr):
@@ -338,8 +338,8 @@ def sweep(
     check_dask(dask, chunk_size)
 
     # --- one job per parameter set ---------------------------------------------------
-    from nilpotent.core.approximation import approximate
-    from nilpotent.core.expressions import format_expression
+    from nilpotent.core.coordinates.approximation import approximate
+    from nilpotent.core.model.expressions import format_expression
 
     names = [n for n, _ in varied]
     combos = list(itertools.product(*[vals for _, vals in varied])) if varied else [()]

@@ -2,7 +2,7 @@
 
 $\\Delta^1 = \\mathrm{span}\\{X_i\\}$, $\\Delta^{s+1} = \\Delta^s + [\\Delta^1, \\Delta^s]$;
 $n_s(p) = \\dim \\Delta^s(p)$ is spanned by the values at $p$ of the bracket words
-of length $\\le s$ (of the Hall basis, :func:`nilpotent.core.brackets.hall_basis`).
+of length $\\le s$ (of the Hall basis, :func:`nilpotent.core.lie.brackets.hall_basis`).
 :func:`analyze` gives the growth vector, the weights, the step, an adapted frame
 made of Hall words, whether $p$ is regular and whether the system is
 bracket-generating there.  Bracket convention $[X,Y] = DY\\cdot X - DX\\cdot Y$.
@@ -14,9 +14,9 @@ How it is computed
    probability one, so near $q$ the words chosen up to length $s$ span
    $\\Delta^s$ as a module and $\\Delta^{s+1}(q)$ is spanned by them and the
    brackets $[X_i, Y]$ with $Y$ a word chosen at length $s$.  Words are
-   evaluated by :class:`~nilpotent.core.word_values.WordValues`: from their
+   evaluated by :class:`~nilpotent.core.lie.word_values.WordValues`: from their
    fields as polynomials in the coordinates and elementary atoms
-   (:mod:`nilpotent.core.polynomial_fields`; exact rationals where the atoms
+   (:mod:`nilpotent.core.lie.polynomial_fields`; exact rationals where the atoms
    are rational, certified arb balls elsewhere), or, for fields outside those
    atoms, from the symengine fields of their halves by forward-mode
    directional derivatives.
@@ -27,7 +27,7 @@ How it is computed
    word of that length, so $n_s(p)$ is exact also at singular points, where
    the span can stall for some lengths and grow later (Martinet at 0:
    growth $(2, 2, 3)$).
-3. Every decision is made by the one rank engine :mod:`nilpotent.core.spans`:
+3. Every decision is made by the one rank engine :mod:`nilpotent.core.decide.spans`:
    independence proved by ball arithmetic (scale-invariant: normalised Gram
    determinants), dependence proved by exact arithmetic; what cannot be
    proved is *undetermined* and reported (``Filtration.undetermined``), never
@@ -45,31 +45,25 @@ from dataclasses import dataclass
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.brackets import (
+from nilpotent.core.analysis.orbit import ORBIT_TIME_BUDGET, OrbitCertificate, certify_by_orbit
+from nilpotent.core.decide.spans import START_PRECISION_BITS, Decision, Span, exact_value
+from nilpotent.core.lie.brackets import (
     Word,
     format_word,
     hall_basis,
     word_length,
     word_values_at,
 )
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.hall_budget import (
+from nilpotent.core.lie.hall_budget import (
     HALL_WORD_BUDGET,
     budget_length,
     check_hall_budget,
     default_max_length,
     default_max_length_for_budget,
 )
-from nilpotent.core.orbit import ORBIT_TIME_BUDGET, OrbitCertificate, certify_by_orbit
-from nilpotent.core.spans import (
-    START_PRECISION_BITS,
-    Decision,
-    Span,
-    exact_decimals,
-    exact_value,
-)
-from nilpotent.core.system import ControlSystem
-from nilpotent.core.word_values import Undefined, WordValues
+from nilpotent.core.lie.word_values import Undefined, WordValues
+from nilpotent.core.model.expressions import as_expr, exact_decimals
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import (
     ComputationLimitError,
     ModelError,
@@ -130,12 +124,12 @@ class Filtration:
         Where the brackets span $\\mathbb{R}^n$ nearby but not at ``p``: a
         polynomial $g$ with $g(p) = 0$, $\\nabla g(p) \\ne 0$ whose zero set is
         invariant under every field, proving ``bracket_generating`` false
-        (:func:`nilpotent.core.singular.invariant_hypersurface`); else None.
+        (:func:`nilpotent.core.analysis.singular.invariant_hypersurface`); else None.
     certified_by:
         When the bracket search at ``p`` ended short of $n$ but the brackets
         were proved to span $\\mathbb{R}^n$ at a point of the orbit of ``p``
         (hence at ``p``, by Nagano's orbit theorem for analytic fields): the
-        :class:`~nilpotent.core.orbit.OrbitCertificate`; else None.
+        :class:`~nilpotent.core.analysis.orbit.OrbitCertificate`; else None.
     growth_vector_known_up_to:
         None when ``growth_vector`` is complete; else the bracket length up to
         which it is proved (it is then a prefix: the lengths at which the span
@@ -181,8 +175,8 @@ class Filtration:
         ``bracket_generating`` and ``regular`` are ``null`` when undetermined;
         ``undetermined`` is then an object saying what was tried (else ``null``).
         """
-        from nilpotent.core.expressions import format_expression
-        from nilpotent.core.points import format_point
+        from nilpotent.core.model.expressions import format_expression
+        from nilpotent.core.model.points import format_point
 
         sys = self.system
         return {
@@ -310,7 +304,7 @@ def generic_growth_vector(
     :data:`GENERIC_PERTURBATION` around ``point`` is regular with probability one;
     there the words chosen at length $s$ span $\\Delta^s$ as a module, so only
     the brackets $[X_i, Y]$ with the words $Y$ chosen at the previous length are
-    needed.  Decisions go through :class:`~nilpotent.core.spans.Span` (exact
+    needed.  Decisions go through :class:`~nilpotent.core.decide.spans.Span` (exact
     for rational values, else certified balls; a Gram determinant that stays
     within $2^{-3P/4}$ of 0 at a random point counts as 0, with probability one).
     The growth of the same words is confirmed at a second random point and the
@@ -499,7 +493,7 @@ def analyze(
         left = max(time_budget - (time.monotonic() - started), 0.0)
         certificate = certify_by_orbit(sys, p, time_budget=min(max(left, 5.0), ORBIT_TIME_BUDGET))
     if bracket_generating is None and not unsure and certificate is None:
-        from nilpotent.core.singular import invariant_hypersurface
+        from nilpotent.core.analysis.singular import invariant_hypersurface
 
         invariant = invariant_hypersurface(sys, p, generic)
         if invariant is not None:
@@ -597,7 +591,7 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
     """One expression whose zero set is the singular locus near ``filtration``'s point.
 
     The locus is computed from the generic frames
-    (:func:`nilpotent.core.singular.singular_set`: the common zeros of the
+    (:func:`nilpotent.core.analysis.singular.singular_set`: the common zeros of the
     determinants of every adapted frame of Hall words with the generic
     weights); this returns its single equation (``1`` when the system is
     regular everywhere).  ``filtration`` (default ``analyze(sys)``) only
@@ -624,7 +618,7 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
     >>> singular_locus(martinet, analyze(martinet, (0, 1, 0)))
     x2
     """
-    from nilpotent.core.singular import singular_set
+    from nilpotent.core.analysis.singular import singular_set
 
     f = filtration if filtration is not None else analyze(sys)
     return singular_set(sys, f.generic_growth_vector).equation

@@ -1,6 +1,6 @@
 r"""Evaluation of constants: exact rationals, certified arb balls, exact symengine numbers.
 
-The numbers under every decision of :mod:`nilpotent.core.spans`:
+The numbers under every decision of :mod:`nilpotent.core.decide.spans`:
 
 * :func:`exact_value`: the exact rational value of a constant (decimals read
   as the rationals they denote, :func:`exact_decimals`), or ``None``;
@@ -23,7 +23,7 @@ import symengine as se
 import sympy as sp
 from flint import arb, fmpq
 
-from nilpotent.core.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr
 
 #: A value of :class:`Evaluator`: an exact ``fmpq`` (exact mode) or an ``arb`` ball.
 #: python-flint's stubs do not describe arithmetic mixing the two, hence ``Any``.

@@ -42,7 +42,7 @@ import sympy as sp
 from sympy.core.sympify import _sympify as _strict_sympy
 from sympy.printing.str import StrPrinter
 
-from nilpotent.core.linear_printer import print_linear
+from nilpotent.core.model.linear_printer import print_linear
 from nilpotent.errors import ComputationLimitError, ExpressionError
 
 __all__ = [
@@ -420,7 +420,7 @@ def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "
     if terms > MAX_TERMS:
         raise ComputationLimitError(
             f"{prefix}{_shorten(text)} would expand to about {terms:.3g} terms, above the "
-            f"limit {MAX_TERMS:,} (nilpotent.core.expressions.MAX_TERMS); brackets and Taylor "
+            f"limit {MAX_TERMS:,} (nilpotent.core.model.expressions.MAX_TERMS); brackets and Taylor "
             "expansions expand it: write the system with fewer or smaller powers")
     return result
 
