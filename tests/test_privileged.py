@@ -226,7 +226,7 @@ def test_float_mode_vanishes_exactly_at_the_exact_point():
 @pytest.mark.parametrize("method", ["linear", "algebraic", "exponential"])
 @pytest.mark.parametrize("name", ["trident-snake", "trident-snake-paper", "car-trailers:3"])
 def test_orders_agree_with_core_orders(name, method):
-    """Second oracle: nilpotent.core.coordinates.orders.function_order (symbolic chains, another module)."""
+    """Second oracle: coordinates.orders.function_order (symbolic chains, another module)."""
     from nilpotent.core.coordinates.orders import function_order as chains_order
 
     sys = get_model(name)

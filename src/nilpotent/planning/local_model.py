@@ -230,7 +230,7 @@ def exact_point(point: Sequence[object] | State) -> tuple[sp.Expr, ...]:
 
 
 def symbolic_model(system: ControlSystem, point: Sequence[object] | State) -> LocalModel:
-    """The nilpotent approximation of :func:`nilpotent.core.coordinates.approximation.approximate` at ``point``.
+    """The nilpotent approximation (:func:`nilpotent.core.coordinates.approximate`) at ``point``.
 
     The point is made exact (:func:`exact_point`) and the symbolic work is
     cached per (system, point); the result is converted to a

@@ -6,7 +6,8 @@ r"""``reproduce``: the paper's pipeline end to end, written as an offline web pa
    statement of the paper against a computation;
 2. the two models — ``trident-snake`` (body-velocity inputs, the paper's
    Section 4, ``r = l = 1``) and ``trident-snake-paper`` (its eq. ``vf``) — with
-   their growth vector, weights and adapted frame (:func:`~nilpotent.core.analysis.filtration.analyze`);
+   their growth vector, weights and adapted frame
+    (:func:`~nilpotent.core.analysis.filtration.analyze`);
 3. privileged coordinates and the nilpotent approximation of each
    (:func:`~nilpotent.core.coordinates.approximation.approximate`), in ``y`` and in ``x``;
 4. the bracket motions of Figs 2–4 (Section 4 robot) and the comparisons of

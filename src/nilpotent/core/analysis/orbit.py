@@ -409,7 +409,6 @@ def certify_by_orbit(
         A certificate that the Lie algebra has rank $n$ at ``point``.
     """
     from nilpotent.core.analysis.growth import generic_growth_at
-
     from nilpotent.core.lie.word_values import Undefined, WordValues
 
     started = time.monotonic()

@@ -45,7 +45,7 @@ class Undefined(Exception):
 
 
 class WordValues:
-    """Values of bracket words at one point, as :class:`~nilpotent.core.decide.spans.Vector` objects.
+    """Values of bracket words at one point, as :class:`~nilpotent.core.decide.spans.Vector` values.
 
     When the fields have a polynomial form in the coordinates and elementary
     atoms (:mod:`nilpotent.core.lie.polynomial_fields`: every model built from the
