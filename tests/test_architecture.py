@@ -25,7 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("core",),
     ("numeric",),
     ("models",),
-    ("simulate", "sweep", "simulation"),
+    ("simulation",),
     ("planning",),
     ("viz",),
     ("report",),

@@ -46,6 +46,7 @@ from nilpotent.models.trident import (
     trident_snake_paper,
     wheel_slip,
 )
+from nilpotent.strict_json import json_object
 
 __all__ = [
     "MAX_TRAILERS",
@@ -146,13 +147,13 @@ class ModelInfo:
 
     def to_json(self) -> dict[str, object]:
         """This entry as one element of the ``nilpotent/models@1`` list (``INTERFACE.md``)."""
-        return {
+        return json_object({
             "name": self.usage,
             "example": self.example_spec,
             "description": self.description,
             "parameters": {k: format_expression(v) for k, v in self.parameters.items()},
             "parameter_rule": self.parameter_summary(),
-        }
+        })
 
 
 #: The built-in models, by registry name (``nilpotent models`` lists them in this order).

@@ -37,6 +37,7 @@ from shapely.geometry.base import BaseGeometry
 
 from nilpotent.core.model.expressions import parse_expression, real_value
 from nilpotent.errors import ExpressionError, WorldError
+from nilpotent.strict_json import json_object
 
 __all__ = ["World", "load_world", "world_from_dict"]
 
@@ -145,7 +146,7 @@ class World:
             out["bounds"] = {"x": list(self.bounds[0]), "y": list(self.bounds[1])}
         out["obstacles"] = [{"polygon": [list(p) for p in poly]} for poly in self.polygons]
         out["obstacles"] += [{"disc": {"center": list(c), "radius": r}} for c, r in self.discs]
-        return out
+        return json_object(out)
 
 
 def _number(value: object, where: str) -> float:

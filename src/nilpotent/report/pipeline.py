@@ -63,6 +63,7 @@ from nilpotent.report.reproduction_data import (
     ReproductionData,
     Settings,
 )
+from nilpotent.strict_json import json_object
 
 if TYPE_CHECKING:
     from nilpotent.core.model.system import ControlSystem
@@ -129,7 +130,7 @@ class Reproduction:
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/reproduce@1`` summary that ``nilpotent reproduce --json`` prints."""
-        return {
+        return json_object({
             "schema": "nilpotent/reproduce@1",
             "out": str(self.out_dir),
             "index": str(self.index),
@@ -143,7 +144,7 @@ class Reproduction:
             "slopes": self.slopes,
             "seconds": round(self.seconds, 3),
             "timings": {k: round(v, 3) for k, v in self.timings.items()},
-        }
+        })
 
 
 # --- formatting ----------------------------------------------------------------------
@@ -402,7 +403,7 @@ def _bracket_motions(
     Also the exact brackets ``[g_i, g_j](0)``.
     """
     from nilpotent.core.lie.brackets import word_values_at
-    from nilpotent.simulate import compare_bracket_motion
+    from nilpotent.simulation import compare_bracket_motion
 
     motions: dict[tuple[str, tuple[int, int]], Any] = {}
     brackets: dict[tuple[str, tuple[int, int]], tuple[sp.Expr, ...]] = {}
@@ -424,7 +425,7 @@ def _amplitude_study(
     systems: dict[str, ControlSystem], approximations: dict[str, Any], settings: Settings
 ) -> dict[tuple[str, tuple[int, int]], Any]:
     """Error of the approximation against amplitude, for every model and bracket."""
-    from nilpotent.simulate import scaling_study
+    from nilpotent.simulation import scaling_study
 
     return {
         (key, pair): scaling_study(

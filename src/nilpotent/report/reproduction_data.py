@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from nilpotent.core.model.system import ControlSystem
     from nilpotent.report.audit import Audit
     from nilpotent.report.paper import PaperContent
-    from nilpotent.simulate import Comparison, ScalingStudy
+    from nilpotent.simulation import Comparison, ScalingStudy
     from nilpotent.viz import AnimationFiles
 
 __all__ = ["BRACKET_PAIRS", "MODEL_KEYS", "PageFigures", "ReproductionData", "Settings"]

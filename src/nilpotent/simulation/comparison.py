@@ -31,6 +31,7 @@ from nilpotent.numeric.integrate import Status
 from nilpotent.numeric.signals import bracket_inputs, bracket_signal, check_bracket
 from nilpotent.simulation.pair import CompiledPair, PairRun
 from nilpotent.simulation.trajectory import float_point
+from nilpotent.strict_json import json_object
 
 __all__ = ["Comparison", "bracket_run", "bracket_value", "compare_bracket_motion"]
 
@@ -149,7 +150,7 @@ class Comparison:
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/simulation@1`` object of INTERFACE.md (plus a few added fields)."""
-        return {
+        return json_object({
             "schema": "nilpotent/simulation@1",
             "model": self.system.name,
             "coordinates": list(self.system.coordinate_names),
@@ -173,7 +174,7 @@ class Comparison:
                 "by_weight_endpoint": {str(w): e for w, e in self.endpoint_by_weight.items()},
             },
             "tolerance": self.tolerance,
-        }
+        })
 
     def plot(self, fig: Any = None) -> tuple[Any, Any]:
         """Both trajectories (model coordinates) and the error per weight group against time.

@@ -1,7 +1,7 @@
 r"""Parameter sweeps of bracket motions: the original system against its nilpotent approximation.
 
 One sample is one *pair* of trajectories under the periodic bracket input of
-:mod:`nilpotent.simulate` ($u_I = -A\omega\sin\omega t$, $u_J = A\omega\cos\omega t$,
+:mod:`nilpotent.numeric.signals` ($u_I = -A\omega\sin\omega t$, $u_J = A\omega\cos\omega t$,
 others 0, ``periods`` whole periods):
 
 * the original system from a start point $q_0$ near $p$ (model coordinates);
@@ -231,7 +231,7 @@ def _ball(rng: np.random.Generator, count: int, n: int, radius: float) -> np.nda
 
 
 def sweep(
-    system: ControlSystem,
+    sys: ControlSystem,
     brackets: Sequence[int] | Sequence[Sequence[int]],
     amplitudes: Sequence[float] = DEFAULT_AMPLITUDES,
     *,
@@ -253,11 +253,11 @@ def sweep(
     dask: Any = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> SweepResult:
-    r"""Simulate many bracket motions of ``system`` and of its nilpotent approximation at $p$.
+    r"""Simulate many bracket motions of ``sys`` and of its nilpotent approximation at $p$.
 
     Parameters
     ----------
-    system:
+    sys:
         The original system (its parameter values are the defaults of ``vary``).
     brackets:
         One pair ``(I, J)`` or a list of pairs (1-based, different fields).
@@ -333,8 +333,8 @@ def sweep(
         raise OptionError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
     if not (math.isfinite(bound) and bound > 0):
         raise OptionError(f"bound must be a number > 0, got {bound}")
-    pairs = _check_brackets(system.m, brackets)
-    varied = _parameter_sets(system, vary)
+    pairs = _check_brackets(sys.m, brackets)
+    varied = _parameter_sets(sys, vary)
     check_dask(dask, chunk_size)
 
     # --- one job per parameter set ---------------------------------------------------
@@ -346,20 +346,20 @@ def sweep(
     jobs: list[CompiledPair] = []
     psets: list[dict[str, str]] = []
     weights: list[tuple[int, ...]] = []
-    base = system.specialized()
+    base = sys.specialized()
     pt = base.point(point) if point is not None else base.origin()
     try:
         p_float = np.array([float(v) for v in pt])
     except TypeError:
         raise PointError(f"the point {pt} is not made of real numbers") from None
     for combo in combos:
-        sys_k = system.with_parameters(dict(zip(names, combo, strict=True))) if combo else system
+        sys_k = sys.with_parameters(dict(zip(names, combo, strict=True))) if combo else sys
         sysp = sys_k.specialized()
         job = CompiledPair.build(sysp, approximate(sysp, pt))
         jobs.append(job)
         psets.append({n: format_expression(v) for n, v in zip(names, combo, strict=True)})
         weights.append(job.weights)
-    n = system.n
+    n = sys.n
     all_groups = tuple(sorted({wk for w in weights for wk in w}))
 
     # --- the rows --------------------------------------------------------------------
@@ -430,7 +430,7 @@ def sweep(
             tolerance = max(tolerance, out["tolerance"])
         scale = max(scale, out["scale"])
     params = SweepParameters(
-        model=system.name,
+        model=sys.name,
         point=tuple(format_expression(v) for v in pt),
         brackets=pairs,
         amplitudes=tuple(float(a) for a in amps),
@@ -452,7 +452,7 @@ def sweep(
     )
     return SweepResult(
         parameters=params,
-        coordinates=system.coordinate_names,
+        coordinates=sys.coordinate_names,
         parameter_sets=tuple(psets),
         weights=tuple(weights),
         groups=all_groups,

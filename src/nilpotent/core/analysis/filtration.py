@@ -68,6 +68,7 @@ from nilpotent.errors import (
     PointError,
 )
 from nilpotent.progress import progress
+from nilpotent.strict_json import json_object
 
 
 @dataclass(frozen=True)
@@ -172,7 +173,7 @@ class Filtration:
         from nilpotent.core.model.points import format_point
 
         sys = self.system
-        return {
+        return json_object({
             "schema": "nilpotent/analysis@1",
             "model": sys.name,
             "coordinates": list(sys.coordinate_names),
@@ -200,7 +201,7 @@ class Filtration:
                 else None
             ),
             "growth_vector_known_up_to": self.growth_vector_known_up_to,
-        }
+        })
 
 
 ANALYSIS_TIME_BUDGET = 60.0

@@ -56,6 +56,7 @@ from nilpotent.core.decide.evaluation import Evaluator, Inaccurate, NotEvaluable
 from nilpotent.core.lie.brackets import Word, format_word, se_coordinates, to_symengine
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError
+from nilpotent.strict_json import json_object
 
 __all__ = ["ORBIT_TIME_BUDGET", "OrbitCertificate", "certify_by_orbit"]
 
@@ -133,7 +134,7 @@ class OrbitCertificate:
                 "statement": self.statement(),
             }
         )
-        return out
+        return json_object(out)
 
 
 def _fmt(t: Fraction) -> str:

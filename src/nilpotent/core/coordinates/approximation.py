@@ -47,6 +47,7 @@ from nilpotent.core.decide.spans import Decision, ExprVector, MeasuredSpan, Span
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 from nilpotent.progress import progress
+from nilpotent.strict_json import json_object
 
 __all__ = ["Certificate", "NilpotentApproximation", "approximate", "certify"]
 
@@ -298,7 +299,7 @@ class NilpotentApproximation:
             "ok": cert.ok,
             "failures": list(cert.failures()),
         }
-        return payload
+        return json_object(payload)
 
     # --- display (nilpotent.typeset) -------------------------------------------------
     def to_latex(self) -> str:

@@ -7,7 +7,7 @@ paper's Section 4, ``r = l = 1``) and ``trident-snake-paper`` (its eq. ``vf``),
 :func:`~nilpotent.core.analysis.filtration.analyze`,
 :func:`~nilpotent.core.coordinates.approximation.approximate`, brackets with
 :func:`~nilpotent.core.lie.brackets.bracket`, and one-period simulations of the
-periodic inputs (:mod:`nilpotent.simulate`) — and compares them **when it
+periodic inputs (:mod:`nilpotent.simulation`) — and compares them **when it
 runs**.  Nothing in this module states a verdict in advance.
 
 Comparisons are exact where the objects are exact: two expressions are equal

@@ -105,13 +105,14 @@ class Computed:
     def displacement_rate(self, sys: ControlSystem, i: int, j: int) -> tuple[float, ...]:
         """``Δx / (πA²)`` over one period of the ``(i, j)`` periodic input, extrapolated to A → 0.
 
-        One-period simulations (:func:`nilpotent.simulate.simulate`) at
+        One-period simulations (:func:`nilpotent.simulation.simulate`) at
         ``A = 0.02`` and ``0.01`` from the origin (adaptive DOP853, rtol 1e-12);
         since ``Δx/(πA²) = [X_i,X_j](0) + c A + O(A²)``, the Richardson
         combination ``2 r(A/2) − r(A)`` removes the ``O(A)`` term.
         """
         from nilpotent.numeric import compile_system
-        from nilpotent.simulate import bracket_signal, simulate
+        from nilpotent.numeric.signals import bracket_signal
+        from nilpotent.simulation import simulate
 
         key = (sys.name, i, j)
         cache = self.__dict__.setdefault("_rates", {})
