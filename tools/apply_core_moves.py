@@ -22,6 +22,13 @@ Usage::
    comes from ``new.module``; when ``new_name`` differs, the name is renamed (as a
    whole word) in the files that import it and in the module that defines it.
 
+With ``--resolve-imports`` (after a merge that stopped on conflicts), a conflict
+hunk whose two sides are both import statements only is resolved to the side
+being merged into (``<<<<<<<``, the old paths: the passes above then rewrite
+them); every other hunk is left for a person, and listed.  A module left directly
+in ``src/nilpotent/core/`` (new on a merged branch) is listed too: add it to the
+map.
+
 Run ``ruff check --fix --select I`` afterwards to sort the rewritten imports.
 """
 
@@ -108,7 +115,8 @@ def rewrite_modules(text: str, modules: list[tuple[str, str]]) -> str:
         new_parent, new_leaf = new.rsplit(".", 1)
         # ``from nilpotent.core import filtration [as f]`` (alone on its statement)
         text = re.sub(
-            rf"^(\s*)from {re.escape(parent)} import {re.escape(leaf)}\b(?! *,)(?=[ \t]*(as \w+)?[ \t]*$)",
+            rf"^(\s*)from {re.escape(parent)} import {re.escape(leaf)}\b"
+            r"(?! *,)(?=[ \t]*(as \w+)?[ \t]*$)",
             rf"\1from {new_parent} import {new_leaf}",
             text,
             flags=re.M,
@@ -165,15 +173,58 @@ def rename_words(text: str, renames: set[tuple[str, str]]) -> str:
     return text
 
 
+_IMPORT_LINE = re.compile(
+    r"^\s*(from [\w.]+ import .*|import [\w., ]+|[\w]+( as \w+)?,?|\)|#.*|)\s*$"
+)
+
+
+def resolve_import_conflicts(text: str) -> tuple[str, int, int]:
+    """Conflict hunks of import lines only -> their first side; (text, resolved, left)."""
+    out: list[str] = []
+    lines = text.splitlines(keepends=True)
+    k = resolved = left = 0
+    while k < len(lines):
+        if not lines[k].startswith("<<<<<<<"):
+            out.append(lines[k])
+            k += 1
+            continue
+        mid = next(j for j in range(k, len(lines)) if lines[j].startswith("======="))
+        end = next(j for j in range(mid, len(lines)) if lines[j].startswith(">>>>>>>"))
+        ours, theirs = lines[k + 1 : mid], lines[mid + 1 : end]
+        if all(_IMPORT_LINE.match(x) for x in ours + theirs):
+            out.extend(ours)
+            resolved += 1
+        else:
+            out.extend(lines[k : end + 1])
+            left += 1
+        k = end + 1
+    return "".join(out), resolved, left
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("root", nargs="?", default=str(HERE.parent))
     parser.add_argument("--map", default=str(HERE / "core_moves.txt"))
     parser.add_argument("--dry-run", action="store_true")
+    parser.add_argument("--resolve-imports", action="store_true",
+                        help="resolve conflict hunks made of import lines only (module doc)")
     args = parser.parse_args(argv)
     root = Path(args.root).resolve()
     modules, names = read_map(Path(args.map))
-    report = move_files(root, modules, args.dry_run)
+    report = []
+    if args.resolve_imports:
+        for path in files(root):
+            if path.suffix != ".py":
+                continue
+            text = path.read_text(encoding="utf-8")
+            if "<<<<<<<" not in text:
+                continue
+            new, resolved, left = resolve_import_conflicts(text)
+            report.append(f"conflicts {path.relative_to(root)}: {resolved} import hunks "
+                          f"resolved, {left} left")
+            if not args.dry_run:
+                path.write_text(new, encoding="utf-8")
+    report += move_files(root, modules, args.dry_run)
     for path in files(root):
         text = path.read_text(encoding="utf-8")
         new = rewrite_modules(text, modules)
@@ -193,6 +244,10 @@ def main(argv: list[str] | None = None) -> int:
                 report.append(f"rename {on} -> {nn} in {target.relative_to(root)}")
                 if not args.dry_run:
                     target.write_text(rename_words(text, {(on, nn)}), encoding="utf-8")
+    core = root / "src" / "nilpotent" / "core"
+    if core.is_dir():
+        report += [f"UNPLACED {p.relative_to(root)}: add it to the map" for p in
+                   sorted(core.glob("*.py")) if p.name != "__init__.py"]
     print("\n".join(report) or "nothing to do")
     return 0
 
