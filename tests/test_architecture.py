@@ -273,6 +273,8 @@ def test_core_rooms_import_only_the_rooms_before_them():
     rooms = {r: k for k, r in enumerate(CORE_ROOMS)}
     core = {p.name for p in (PACKAGE / "core").iterdir() if p.is_dir() and p.name != "__pycache__"}
     assert core == set(CORE_ROOMS), "place new rooms of core in CORE_ROOMS"
+    loose = sorted(p.name for p in (PACKAGE / "core").glob("*.py") if p.name != "__init__.py")
+    assert loose == [], "every module of core lives in a room (tools/core_moves.txt)"
     upward = []
     for module, targets in graph.items():
         parts = module.split(".")

@@ -22,12 +22,15 @@ Usage::
    comes from ``new.module``; when ``new_name`` differs, the name is renamed (as a
    whole word) in the files that import it and in the module that defines it.
 
-With ``--resolve-imports`` (after a merge that stopped on conflicts), a conflict
-hunk whose two sides are both import statements only is resolved to the side
-being merged into (``<<<<<<<``, the old paths: the passes above then rewrite
-them); every other hunk is left for a person, and listed.  A module left directly
-in ``src/nilpotent/core/`` (new on a merged branch) is listed too: add it to the
-map.
+With ``--resolve-imports REF`` (after ``git merge REF`` stopped on conflicts), a
+conflict hunk whose two sides are both import statements only is resolved to the
+side being merged into (``<<<<<<<``, the old paths: the passes above then rewrite
+them); every other hunk is left for a person, and listed.  Then, for each name
+``ruff`` finds undefined (F821) in ``src``/``tests``, the import that binds it in
+``REF``'s version of the file is added back (an import only the merged side had).
+Resolve the hunks left, run again with the same option, then ``ruff check --fix``.
+A module left directly in ``src/nilpotent/core/`` (new on a merged branch) is
+listed: add it to the map.
 
 Run ``ruff check --fix --select I`` afterwards to sort the rewritten imports.
 """
@@ -36,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import json
 import re
 import shutil
 import subprocess
@@ -142,12 +146,16 @@ def rewrite_names(
     except SyntaxError:
         return text, set()
     moved = {(om, on): (nm, nn) for om, on, nm, nn in names}
+    renamed = {(nm, nn): on for om, on, nm, nn in names if on != nn}
     lines = text.splitlines(keepends=True)
     renames: set[tuple[str, str]] = set()
     edits = []
     for node in ast.walk(tree):
         if not isinstance(node, ast.ImportFrom) or node.level or not node.module:
             continue
+        # already the new name (a merged import line): rename what is left of the old one
+        renames |= {(renamed[(node.module, a.name)], a.name) for a in node.names
+                    if (node.module, a.name) in renamed}
         hits = [a for a in node.names if (node.module, a.name) in moved]
         if not hits:
             continue
@@ -201,13 +209,59 @@ def resolve_import_conflicts(text: str) -> tuple[str, int, int]:
     return "".join(out), resolved, left
 
 
+def undefined_names(root: Path) -> dict[Path, set[str]]:
+    """``ruff``'s F821 (undefined name) findings under ``src`` and ``tests``, by file."""
+    ruff = shutil.which("ruff") or str(Path(sys.executable).with_name("ruff"))
+    out = subprocess.run(
+        [ruff, "check", "--select", "F821", "--output-format", "json", "--exit-zero",
+         *(str(root / t) for t in ("src", "tests") if (root / t).is_dir())],
+        capture_output=True, text=True, check=True,
+    )
+    found: dict[Path, set[str]] = {}
+    for item in json.loads(out.stdout or "[]"):
+        m = re.search(r"`([^`]+)`", item["message"])
+        if m:
+            found.setdefault(Path(item["filename"]), set()).add(m.group(1))
+    return found
+
+
+def take_back_imports(path: Path, names: set[str], ref_text: str) -> list[str]:
+    """Add the top-level imports of ``ref_text`` that bind ``names`` (undefined in ``path``)."""
+    try:
+        ref = ast.parse(ref_text)
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+    except SyntaxError:
+        return []
+    added = [
+        f"from {stmt.module} import {a.name}" + (f" as {a.asname}" if a.asname else "")
+        for stmt in ref.body
+        if isinstance(stmt, ast.ImportFrom) and not stmt.level and stmt.module
+        for a in stmt.names
+        if (a.asname or a.name) in names
+    ] + [
+        f"import {a.name}" + (f" as {a.asname}" if a.asname else "")
+        for stmt in ref.body
+        if isinstance(stmt, ast.Import)
+        for a in stmt.names
+        if (a.asname or a.name.split(".")[0]) in names
+    ]
+    imports = [n for n in tree.body if isinstance(n, ast.Import | ast.ImportFrom)]
+    if added and imports:
+        lines = path.read_text(encoding="utf-8").splitlines(keepends=True)
+        last = max(n.end_lineno or n.lineno for n in imports)
+        lines[last:last] = [line + "\n" for line in added]
+        path.write_text("".join(lines), encoding="utf-8")
+    return added
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("root", nargs="?", default=str(HERE.parent))
     parser.add_argument("--map", default=str(HERE / "core_moves.txt"))
     parser.add_argument("--dry-run", action="store_true")
-    parser.add_argument("--resolve-imports", action="store_true",
-                        help="resolve conflict hunks made of import lines only (module doc)")
+    parser.add_argument("--resolve-imports", metavar="REF",
+                        help="resolve conflict hunks made of import lines only, taking back "
+                             "the imports of REF (the merged branch) they need (module doc)")
     args = parser.parse_args(argv)
     root = Path(args.root).resolve()
     modules, names = read_map(Path(args.map))
@@ -244,6 +298,19 @@ def main(argv: list[str] | None = None) -> int:
                 report.append(f"rename {on} -> {nn} in {target.relative_to(root)}")
                 if not args.dry_run:
                     target.write_text(rename_words(text, {(on, nn)}), encoding="utf-8")
+    if args.resolve_imports and not args.dry_run:
+        # what the side merged into did not import: take it back from the merged branch
+        # (and what the merged-into side imported and a resolution dropped: from HEAD)
+        for ref in (args.resolve_imports, "HEAD"):
+            for path, missing in sorted(undefined_names(root).items()):
+                rel = path.resolve().relative_to(root)
+                shown = subprocess.run(["git", "-C", str(root), "show", f"{ref}:{rel}"],
+                                       capture_output=True, text=True)
+                if shown.returncode == 0:
+                    added = take_back_imports(path, missing, shown.stdout)
+                    if added:
+                        report.append(f"imports taken back from {ref} into {rel}: "
+                                      + "; ".join(added))
     core = root / "src" / "nilpotent" / "core"
     if core.is_dir():
         report += [f"UNPLACED {p.relative_to(root)}: add it to the map" for p in

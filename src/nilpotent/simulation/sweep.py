@@ -304,6 +304,16 @@ def sweep(
     -------
     SweepResult
         Rows ordered parameter set → bracket → start → amplitude (grid), or as drawn (random).
+
+    Raises
+    ------
+    OptionError
+        If an option is out of its range (amplitudes, samples, radius, design,
+        periods, integration settings, chunk size, the parameters to vary).
+    PointError
+        If the point is not a point of ``sys``.
+    MissingExtraError
+        If ``dask`` is given without the ``dask`` extra installed.
     """
     # --- validate the request --------------------------------------------------------
     if design not in DESIGNS:
