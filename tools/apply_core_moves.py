@@ -22,10 +22,12 @@ Usage::
    comes from ``new.module``; when ``new_name`` differs, the name is renamed (as a
    whole word) in the files that import it and in the module that defines it.
 
-With ``--resolve-imports REF`` (after ``git merge REF`` stopped on conflicts), a
-conflict hunk whose two sides are both import statements only is resolved to the
-side being merged into (``<<<<<<<``, the old paths: the passes above then rewrite
-them); every other hunk is left for a person, and listed.  Then, for each name
+With ``--resolve-imports REF`` (after ``git merge REF`` stopped on conflicts; the
+markers are re-made with the ancestor, ``git checkout --conflict=diff3``), a
+conflict hunk where ``REF`` only rewrote paths takes the other side, rewritten;
+a hunk whose two sides are import statements only takes the side being merged
+into (``<<<<<<<``, the old paths: the passes above rewrite them); every other
+hunk is left for a person, and listed.  Then, for each name
 ``ruff`` finds undefined (F821) in ``src``/``tests``, the import that binds it in
 ``REF``'s version of the file is added back (an import only the merged side had).
 Resolve the hunks left, run again with the same option, then ``ruff check --fix``.
@@ -186,8 +188,14 @@ _IMPORT_LINE = re.compile(
 )
 
 
-def resolve_import_conflicts(text: str) -> tuple[str, int, int]:
-    """Conflict hunks of import lines only -> their first side; (text, resolved, left)."""
+def resolve_conflicts(text: str, rewrite) -> tuple[str, int, int]:
+    """Resolve the conflict hunks (``diff3`` style: ours ||| base === theirs) that are this
+    script's business; returns ``(text, resolved, left)``.
+
+    A hunk where the merged branch only rewrote paths (``rewrite(base) == theirs``) takes
+    our side, rewritten; a hunk of import lines only takes our side (the passes after
+    rewrite it; what it lacks is taken back later).  Others are left.
+    """
     out: list[str] = []
     lines = text.splitlines(keepends=True)
     k = resolved = left = 0
@@ -198,8 +206,12 @@ def resolve_import_conflicts(text: str) -> tuple[str, int, int]:
             continue
         mid = next(j for j in range(k, len(lines)) if lines[j].startswith("======="))
         end = next(j for j in range(mid, len(lines)) if lines[j].startswith(">>>>>>>"))
-        ours, theirs = lines[k + 1 : mid], lines[mid + 1 : end]
-        if all(_IMPORT_LINE.match(x) for x in ours + theirs):
+        bar = next((j for j in range(k, mid) if lines[j].startswith("|||||||")), mid)
+        ours, base, theirs = lines[k + 1 : bar], lines[bar + 1 : mid], lines[mid + 1 : end]
+        if bar < mid and rewrite("".join(base)) == "".join(theirs):
+            out.append(rewrite("".join(ours)))
+            resolved += 1
+        elif all(_IMPORT_LINE.match(x) for x in ours + theirs):
             out.extend(ours)
             resolved += 1
         else:
@@ -267,14 +279,26 @@ def main(argv: list[str] | None = None) -> int:
     modules, names = read_map(Path(args.map))
     report = []
     if args.resolve_imports:
+        unmerged = subprocess.run(["git", "-C", str(root), "diff", "--name-only",
+                                   "--diff-filter=U"], capture_output=True, text=True).stdout
+        for rel in unmerged.split():
+            # the markers again, with the common ancestor's text (diff3)
+            subprocess.run(["git", "-C", str(root), "checkout", "--conflict=diff3", "--", rel],
+                           check=True)
         for path in files(root):
-            if path.suffix != ".py":
-                continue
             text = path.read_text(encoding="utf-8")
             if "<<<<<<<" not in text:
                 continue
-            new, resolved, left = resolve_import_conflicts(text)
-            report.append(f"conflicts {path.relative_to(root)}: {resolved} import hunks "
+
+            def rewrite(part: str, py: bool = path.suffix == ".py") -> str:
+                part = rewrite_modules(part, modules)
+                if py:
+                    part, renames = rewrite_names(part, names)
+                    part = rename_words(part, renames)
+                return part
+
+            new, resolved, left = resolve_conflicts(text, rewrite)
+            report.append(f"conflicts {path.relative_to(root)}: {resolved} hunks "
                           f"resolved, {left} left")
             if not args.dry_run:
                 path.write_text(new, encoding="utf-8")

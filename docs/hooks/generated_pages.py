@@ -58,11 +58,17 @@ def api_page() -> str:
         "Every name of `nilpotent.__all__`, from its docstring (numpydoc), at the module "
         "that defines it. `import nilpotent as nil` and call `nil.<name>`.\n",
     ]
+    shown: dict[int, str] = {}
     for name in sorted(nilpotent.__all__):
         obj = getattr(nilpotent, name)
         if not (inspect.isclass(obj) or inspect.isfunction(obj)):
             parts.append(f"## `{name}`\n\n`nilpotent.{name} = {obj!r}`\n")
             continue
+        if id(obj) in shown:  # a second name (named like a command): one entry per object
+            first = shown[id(obj)]
+            parts.append(f"## `{name}`\n\nThe same function as [`{first}`](#{first}).\n")
+            continue
+        shown[id(obj)] = name
         parts.append(
             f"## `{name}`\n\n::: {obj.__module__}.{obj.__qualname__}\n"
             "    options:\n      show_root_heading: false\n      heading_level: 3\n"
