@@ -3,7 +3,7 @@
 ``@pytest.mark.every_model`` runs a test once per entry of the model registry
 (:data:`nilpotent.models.MODELS`, each built from its ``example_spec``: the
 joint-form trident included, ``car-trailers:1`` for the family); the test takes
-the built :class:`~nilpotent.core.system.ControlSystem` as its ``model``
+the built :class:`~nilpotent.core.model.system.ControlSystem` as its ``model``
 argument.  ``@pytest.mark.every_model(slow=("trident-snake-joints",))`` marks
 the runs on the named models slow.  A new built-in model is therefore checked by every such property
 without editing any test.  Tests that work at a point use :func:`model_point`: the origin, or the

@@ -13,10 +13,10 @@ import sympy as sp
 from hypothesis import HealthCheck, given, settings
 
 from conftest import model_point
-from nilpotent.core.approximation import approximate, certify
-from nilpotent.core.filtration import analyze
-from nilpotent.core.privileged import METHODS
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.coordinates.approximation import approximate, certify
+from nilpotent.core.coordinates.privileged import METHODS
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NotPrivilegedError, OptionError
 from nilpotent.models import get_model
 from polynomial_systems import (

@@ -24,7 +24,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from nilpotent.cli.app import bounded_float
-from nilpotent.core.points import MAX_MAGNITUDE, check_magnitude
+from nilpotent.core.model.points import MAX_MAGNITUDE, check_magnitude
 from nilpotent.errors import NilpotentError, OptionError, WorldError
 
 

@@ -20,7 +20,7 @@ import sympy as sp
 
 import nilpotent as nil
 from conftest import model_point
-from nilpotent.core.modelfile import dump_model_file
+from nilpotent.core.model.modelfile import dump_model_file
 from nilpotent.models import MODELS
 
 pytestmark = pytest.mark.every_model

@@ -2,7 +2,7 @@
 
 Growth vectors are computed here by an independent small rank computation
 (all brackets of length k as ``[X_i, B]`` with ``B`` of length k − 1, which
-span the k-th layer), not with ``nilpotent.core.filtration``.
+span the k-th layer), not with ``nilpotent.core.analysis.filtration``.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import random
 import pytest
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models import MODELS, get_model, list_models, load_system
 
@@ -141,7 +141,7 @@ def test_load_system_builtin_and_errors(tmp_path):
 
 
 def test_load_system_reads_a_model_file(tmp_path):
-    pytest.importorskip("nilpotent.core.modelfile")
+    pytest.importorskip("nilpotent.core.model.modelfile")
     path = tmp_path / "uni.toml"
     path.write_text(
         'name = "uni"\ncoordinates = ["x", "y", "theta"]\n[parameters]\nv = 2\n'
@@ -266,7 +266,7 @@ CROSS_CHECK = {
 
 @pytest.mark.parametrize("spec", sorted(CROSS_CHECK))
 def test_core_filtration_agrees_with_the_hand_derived_growth(spec):
-    filtration = pytest.importorskip("nilpotent.core.filtration")
+    filtration = pytest.importorskip("nilpotent.core.analysis.filtration")
     result = filtration.analyze(get_model(spec))
     assert result.growth_vector == CROSS_CHECK[spec]
     assert result.regular == (spec != "martinet")

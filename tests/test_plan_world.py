@@ -23,8 +23,8 @@ from matplotlib.path import Path as MplPath
 from scipy.integrate import solve_ivp
 
 import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
-from nilpotent.core.modelfile import system_from_dict, system_to_dict
-from nilpotent.core.outline import Limits
+from nilpotent.core.model.modelfile import system_from_dict, system_to_dict
+from nilpotent.core.model.outline import Limits
 from nilpotent.errors import ModelError, PlanningError, WorldError
 from nilpotent.models import get_model
 from nilpotent.models.trident import TridentGeometry

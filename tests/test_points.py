@@ -9,10 +9,9 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.expressions import real_value
-from nilpotent.core.points import format_point, parse_param_assignments, parse_point
-from nilpotent.core.spans import exact_decimals
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.expressions import exact_decimals, real_value
+from nilpotent.core.model.points import format_point, parse_param_assignments, parse_point
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError, PointError
 
 x, y, th = sp.symbols("x y theta")

@@ -18,7 +18,7 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.approximation import approximate
+from nilpotent.core.coordinates.approximation import approximate
 from nilpotent.errors import ExpressionError, MissingExtraError, OptionError
 from nilpotent.models import get_model
 from nilpotent.numeric.integrate import Status

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from nilpotent.models import get_model
+from nilpotent.simulation import sweep
 from nilpotent.simulation.executors import loopback_cluster
-from nilpotent.sweep import sweep
 
 pytest.importorskip("distributed")
 

@@ -63,10 +63,10 @@ API_TOPICS: tuple[tuple[str, str, str, tuple[str, ...]], ...] = (
         "Systems and analysis",
         "control systems, brackets and the filtration (growth vector, weights, singular locus)",
         (
-            "nilpotent.core.system",
-            "nilpotent.core.filtration",
-            "nilpotent.core.brackets",
-            "nilpotent.core.orbit",
+            "nilpotent.core.model.system",
+            "nilpotent.core.analysis.filtration",
+            "nilpotent.core.lie.brackets",
+            "nilpotent.core.analysis.orbit",
         ),
     ),
     (
@@ -75,10 +75,10 @@ API_TOPICS: tuple[tuple[str, str, str, tuple[str, ...]], ...] = (
         "privileged coordinates, non-holonomic orders, the nilpotent approximation and its "
         "certificate",
         (
-            "nilpotent.core.privileged",
-            "nilpotent.core.approximation",
-            "nilpotent.core.orders",
-            "nilpotent.core.taylor",
+            "nilpotent.core.coordinates.privileged",
+            "nilpotent.core.coordinates.approximation",
+            "nilpotent.core.coordinates.orders",
+            "nilpotent.core.coordinates.jets",
         ),
     ),
     (
@@ -102,7 +102,7 @@ API_TOPICS: tuple[tuple[str, str, str, tuple[str, ...]], ...] = (
         "planning",
         "Planning",
         "steering with the approximation, limits, outlines, worlds, closed-loop execution",
-        ("nilpotent.planning", "nilpotent.core.outline"),
+        ("nilpotent.planning", "nilpotent.core.model.outline"),
     ),
     (
         "models",
@@ -110,9 +110,9 @@ API_TOPICS: tuple[tuple[str, str, str, tuple[str, ...]], ...] = (
         "built-in models, model files, points and the expression grammar",
         (
             "nilpotent.models",
-            "nilpotent.core.modelfile",
-            "nilpotent.core.points",
-            "nilpotent.core.expressions",
+            "nilpotent.core.model.modelfile",
+            "nilpotent.core.model.points",
+            "nilpotent.core.model.expressions",
         ),
     ),
     ("paper", "The paper", "the trident snake paper reproduced and audited", ("nilpotent.report",)),
@@ -130,11 +130,11 @@ API_TOPICS: tuple[tuple[str, str, str, tuple[str, ...]], ...] = (
 #: objects" of their topic so that the references resolve.
 API_SUPPORTING: dict[str, tuple[str, ...]] = {
     "systems": (
-        "nilpotent.core.orbit.OrbitCertificate",
-        "nilpotent.core.singular.singular_set",
-        "nilpotent.core.singular.invariant_hypersurface",
+        "nilpotent.core.analysis.orbit.OrbitCertificate",
+        "nilpotent.core.analysis.singular.singular_set",
+        "nilpotent.core.analysis.singular.invariant_hypersurface",
     ),
-    "coordinates": ("nilpotent.core.taylor.Poly",),
+    "coordinates": ("nilpotent.core.coordinates.jets.Poly",),
     "simulation": (
         "nilpotent.numeric.integrate.BatchSolution",
         "nilpotent.numeric.integrate.Status",
@@ -190,6 +190,7 @@ def api_pages() -> dict[str, str]:
         "|---|---|---|",
     ]
     pages: dict[str, str] = {}
+    shown: dict[int, tuple[str, str]] = {}
     for key, members in groups.items():
         members = [(n, o) for n, o in members if n != "__version__"]
         if not members:
@@ -199,6 +200,12 @@ def api_pages() -> dict[str, str]:
         index.append(f"| [{title}]({key}.md) | {what} | {names} |")
         parts = [f"# {title}\n", f"{what[0].upper()}{what[1:]}.\n"]
         for name, obj in members:
+            if id(obj) in shown:  # a second name (named like a command): one entry per object
+                page, first = shown[id(obj)]
+                where = "" if page == key else f"{page}.md"
+                parts.append(f"## `{name}`\n\nThe same function as [`{first}`]({where}#{first}).\n")
+                continue
+            shown[id(obj)] = (key, name)
             if not _documented(obj):
                 parts.append(f"## `{name}`\n\n{_describe(name, obj)}\n")
                 continue

@@ -150,7 +150,7 @@ MAX_CORRECTIONS = 1000
 """Most re-plans toward the goal of ``execute`` (``--max-corrections``)."""
 MAX_BRACKET_LENGTH = 64
 """Longest bracket length an option may ask for (``--max-length``); the Hall-word budget
-of :mod:`nilpotent.core.filtration` usually bounds it lower."""
+of :mod:`nilpotent.core.analysis.filtration` usually bounds it lower."""
 
 JsonOpt = Annotated[
     bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else.")
@@ -190,7 +190,7 @@ def work(description: str, total: int | None = None):
 
 def load_model_option(spec: str, params: list[str] | None):
     """Load MODEL (a built-in name or a model file) with ``--param`` assignments applied."""
-    from nilpotent.core.points import parse_param_assignments
+    from nilpotent.core.model.points import parse_param_assignments
     from nilpotent.models import load_system
 
     values = parse_param_assignments(list(params or []), option="--param")
@@ -199,7 +199,7 @@ def load_model_option(spec: str, params: list[str] | None):
 
 def parse_point_option(text: str | None, system, option: str = "--at"):
     """Parse a point option (``--at``, ``--from``, ``--to``); ``None`` means the origin."""
-    from nilpotent.core.points import parse_point
+    from nilpotent.core.model.points import parse_point
 
     if text is None:
         return system.origin()
@@ -361,7 +361,7 @@ def bounded_float(
     """A typer ``parser`` for a real-number option in ``[low, high]`` (``(low, high]`` with
     ``open_low``): the one check of every real number the command line takes.
 
-    ``high`` defaults to :data:`nilpotent.core.points.MAX_MAGNITUDE` (1e6), the
+    ``high`` defaults to :data:`nilpotent.core.model.points.MAX_MAGNITUDE` (1e6), the
     documented magnitude of user numbers.  Text that is not a number: a usage error;
     ``nan``, ``inf``, past the range of a double or outside the range: an
     :class:`~nilpotent.errors.OptionError` naming the option.  ``floor`` (above
@@ -371,7 +371,7 @@ def bounded_float(
     """
 
     def parse(value: Any) -> float:
-        from nilpotent.core.points import MAX_MAGNITUDE, check_magnitude
+        from nilpotent.core.model.points import MAX_MAGNITUDE, check_magnitude
 
         top = MAX_MAGNITUDE if high is None else high
         if isinstance(value, bool):
@@ -418,8 +418,8 @@ def parse_int_pair(text: str, option: str, upper: int) -> tuple[int, int]:
 
 def parse_float_list(text: str, option: str) -> list[float]:
     """Parse ``A1,A2,...`` as finite floats (plain decimals only) of magnitude at most
-    :data:`nilpotent.core.points.MAX_MAGNITUDE`."""
-    from nilpotent.core.points import check_magnitude
+    :data:`nilpotent.core.model.points.MAX_MAGNITUDE`."""
+    from nilpotent.core.model.points import check_magnitude
 
     out: list[float] = []
     for piece in text.split(","):

@@ -66,8 +66,8 @@ CorrOpt = Annotated[
 def parse_mismatch(text: str | None) -> dict[str, float]:
     """``r=0.05,l=-0.05`` → ``{"r": 0.05, "l": -0.05}`` (values: expressions of the grammar,
     read by the one ``NAME=VALUE,...`` parser: each name once)."""
-    from nilpotent.core.expressions import real_value
-    from nilpotent.core.points import parse_assignments
+    from nilpotent.core.model.expressions import real_value
+    from nilpotent.core.model.points import parse_assignments
 
     if not text:
         return {}

@@ -87,7 +87,7 @@ def _split_top_level(text: str) -> list[str]:
 
 def parse_vary(items: list[str] | None) -> dict[str, list[Any]]:
     """``--vary NAME=V1,V2,...`` (repeatable); values through the safe expression grammar."""
-    from nilpotent.core.expressions import parse_expression
+    from nilpotent.core.model.expressions import parse_expression
 
     out: dict[str, list[Any]] = {}
     for item in items or []:
@@ -107,7 +107,7 @@ def parse_vary(items: list[str] | None) -> dict[str, list[Any]]:
 def _check_vary_values(model: str, param: list[str] | None, varied: dict[str, list[Any]]
                        ) -> None:
     """Check each ``--vary`` value as ``--param`` would be (positive lengths, ...)."""
-    from nilpotent.core.expressions import format_expression
+    from nilpotent.core.model.expressions import format_expression
     from nilpotent.errors import NilpotentError
 
     for name, values in varied.items():

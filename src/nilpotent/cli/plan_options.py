@@ -82,8 +82,8 @@ MaxPieceOpt = Annotated[
 
 def parse_limit_options(texts: list[str] | None, system) -> dict[str, tuple[float, float]]:
     """``--limit NAME=LO:HI`` (repeatable) → ``{name: (lo, hi)}``; LO, HI are expressions."""
-    from nilpotent.core.expressions import parse_expression, real_value
-    from nilpotent.core.points import check_magnitude
+    from nilpotent.core.model.expressions import parse_expression, real_value
+    from nilpotent.core.model.points import check_magnitude
 
     out: dict[str, tuple[float, float]] = {}
     for text in texts or []:

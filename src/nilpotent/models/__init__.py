@@ -31,8 +31,8 @@ from types import MappingProxyType
 
 import sympy as sp
 
-from nilpotent.core.expressions import format_expression
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.expressions import format_expression
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
 from nilpotent.models.groups import rigid_body, roto_translation
@@ -55,6 +55,7 @@ from nilpotent.models.vehicles import (
     snakeboard,
     space_robot,
 )
+from nilpotent.strict_json import json_object
 
 __all__ = [
     "MAX_TRAILERS",
@@ -97,7 +98,7 @@ class ModelInfo:
         Registry name (``"trident-snake"``, ``"car-trailers"``).
     build : Callable[..., ControlSystem]
         ``build()`` (or ``build(K)`` when :attr:`argument` is set) returns the
-        :class:`~nilpotent.core.system.ControlSystem` with its default
+        :class:`~nilpotent.core.model.system.ControlSystem` with its default
         parameter values.
     argument : str or None
         Name of the integer argument written after a colon (``"K"`` for
@@ -165,7 +166,7 @@ class ModelInfo:
         system : ControlSystem or None
             The built model (with any parameters applied); ``None``: :attr:`example`.
         """
-        from nilpotent.core.points import parse_point
+        from nilpotent.core.model.points import parse_point
 
         sys = system if system is not None else self.example
         return parse_point(self.example_at, sys) if self.example_at else sys.origin()
@@ -178,13 +179,13 @@ class ModelInfo:
 
     def to_json(self) -> dict[str, object]:
         """This entry as one element of the ``nilpotent/models@1`` list (``INTERFACE.md``)."""
-        return {
+        return json_object({
             "name": self.usage,
             "example": self.example_spec,
             "description": self.description,
             "parameters": {k: format_expression(v) for k, v in self.parameters.items()},
             "parameter_rule": self.parameter_summary(),
-        }
+        })
 
 
 #: The built-in models, by registry name (``nilpotent models`` lists them in this order).
@@ -346,10 +347,10 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
     spec:
         A built-in spec (see :func:`get_model`) or a path to a model file in
         the ``INTERFACE.md`` format, read by
-        :func:`nilpotent.core.modelfile.load_model_file`.
+        :func:`nilpotent.core.model.modelfile.load_model_file`.
     params:
         Parameter values applied with
-        :meth:`~nilpotent.core.system.ControlSystem.with_parameters`.
+        :meth:`~nilpotent.core.model.system.ControlSystem.with_parameters`.
 
     Raises
     ------
@@ -369,7 +370,7 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
         )
     if problem is not None:
         raise ModelError(f"model file {_shown(spec)!r} {problem}")
-    from nilpotent.core.modelfile import load_model_file  # lazy: written alongside
+    from nilpotent.core.model.modelfile import load_model_file  # lazy: written alongside
 
     system = load_model_file(path)
     if params:

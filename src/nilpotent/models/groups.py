@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 
 __all__ = ["PITCH_LIMIT", "rigid_body", "roto_translation"]
 

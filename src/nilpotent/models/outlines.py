@@ -39,8 +39,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nilpotent.core.outline import Limits, Outline
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Limits, Outline
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.models.groups import PITCH_LIMIT
 from nilpotent.models.vehicles import (
     car_outline,

@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nilpotent.core.outline import Outline
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Outline
+from nilpotent.core.model.system import ControlSystem
 
 __all__ = [
     "car",

@@ -23,7 +23,7 @@ subexpressions eliminated), written to a ``.py`` file in the cache directory
 (:mod:`nilpotent.numeric.cache`) named by a hash of the expressions, and
 imported from there: numba's on-disk cache then makes a second process start in
 a fraction of a second.  The expressions come from a
-:class:`~nilpotent.core.system.ControlSystem` (user text has been parsed by the
+:class:`~nilpotent.core.model.system.ControlSystem` (user text has been parsed by the
 safe grammar before); no user string is ever evaluated here.
 
 Backends: ``"numpy"`` (always), ``"numba"`` (parallel over the batch),
@@ -46,7 +46,7 @@ import sympy as sp
 from sympy.printing.numpy import JaxPrinter, NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
-from nilpotent.core.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr
 from nilpotent.errors import MissingExtraError, ModelError, OptionError
 from nilpotent.numeric.cache import content_key, load_generated_module
 
@@ -366,7 +366,7 @@ def compile_fields(
 
 
 def compile_system(system: Any, *, backend: str = "auto") -> CompiledSystem:
-    """Compile a :class:`~nilpotent.core.system.ControlSystem` (parameters substituted).
+    """Compile a :class:`~nilpotent.core.model.system.ControlSystem` (parameters substituted).
 
     Memoised per ``(system, backend)`` (the 128 most recent): compiling is
     symbolic work (substitution, hashing) worth doing once per system.

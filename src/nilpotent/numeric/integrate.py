@@ -38,8 +38,9 @@ import numpy as np
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import CompiledSystem
 from nilpotent.numeric.engines import ENGINES as ENGINES
-from nilpotent.numeric.engines import Status as Status
-from nilpotent.numeric.engines import check_times, choose_engine, engine_names, input_cycles
+from nilpotent.numeric.engines import choose_engine, engine_names, input_cycles
+from nilpotent.numeric.engines.base import Status as Status
+from nilpotent.numeric.engines.base import check_times
 from nilpotent.numeric.engines.numba_engine import kernels_cached as kernels_cached
 from nilpotent.numeric.engines.scipy_engine import solve_function_input as solve_function_input
 from nilpotent.numeric.signals import Signal

@@ -45,8 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.core.outline import Limits
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Limits
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import (
     ComputationLimitError,
     IntegrationError,
@@ -160,7 +160,7 @@ class GlobalPlan:
         ``clearance``, ``limits_ok``, ``min_singular_margin`` and more; no NaN/Infinity
         (undefined numbers are null, ``null_reasons`` says why)."""
         v = self.verification
-        out = self.plan.to_json()
+        out = self.plan.json_fields()
         reasons: dict[str, str] = {}
         if v.clearance is None:
             reasons["clearance"] = "no world given: no obstacles to measure against"

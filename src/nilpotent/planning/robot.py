@@ -1,6 +1,6 @@
 """A robot's outline evaluated at configurations: shapely geometries, limits, singular margin.
 
-:class:`Robot` compiles a system's :class:`~nilpotent.core.outline.Outline`
+:class:`Robot` compiles a system's :class:`~nilpotent.core.model.outline.Outline`
 (parameters substituted) with ``sympy.lambdify`` (the expressions came from
 the safe grammar or the built-ins) and turns arrays of configurations
 ``(N, n)`` into shapely 2 geometries, vectorised (``shapely.polygons``,
@@ -25,9 +25,9 @@ import numpy as np
 import shapely
 import sympy as sp
 
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.outline import Limits, Outline
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.outline import Limits, Outline
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError, OptionError
 
 __all__ = ["OutlinePoints", "Robot", "singular_margin_function"]

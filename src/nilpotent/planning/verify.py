@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nilpotent.core.outline import Limits
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Limits
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment

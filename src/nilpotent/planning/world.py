@@ -12,11 +12,11 @@ A world file (INTERFACE.md, ``docs/worlds.md``)::
     disc = { center = [3.0, -0.5], radius = 0.4 }
 
 Numbers may be constant expressions of the safe grammar (``"sqrt(2)"``).  A world
-file is read like a model file (:func:`nilpotent.core.datafile.read_data_file`:
+file is read like a model file (:func:`nilpotent.core.model.datafile.read_data_file`:
 TOML or the same structure as JSON by its suffix, a UTF-8 byte-order mark read
 past, a JSON key given twice refused, only regular files of at most 1 MB).
 Every number is finite and of magnitude at most
-:data:`nilpotent.core.points.MAX_MAGNITUDE` (1e6); a disc's radius is in
+:data:`nilpotent.core.model.points.MAX_MAGNITUDE` (1e6); a disc's radius is in
 ``(0, 1e6]``; a world has at most :data:`MAX_OBSTACLES` obstacles and a polygon at
 most :data:`MAX_POLYGON_VERTICES` vertices (a
 :class:`~nilpotent.errors.ComputationLimitError` past them, naming the file).
@@ -42,10 +42,11 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
-from nilpotent.core.datafile import read_data_file
-from nilpotent.core.expressions import parse_expression, real_value
-from nilpotent.core.points import MAX_MAGNITUDE, check_magnitude
+from nilpotent.core.model.datafile import read_data_file
+from nilpotent.core.model.expressions import parse_expression, real_value
+from nilpotent.core.model.points import MAX_MAGNITUDE, check_magnitude
 from nilpotent.errors import ComputationLimitError, ExpressionError, WorldError
+from nilpotent.strict_json import json_object
 
 __all__ = [
     "MAX_OBSTACLES", "MAX_POLYGON_VERTICES", "World", "builtin_worlds", "load_world",
@@ -165,7 +166,7 @@ class World:
             out["bounds"] = {"x": list(self.bounds[0]), "y": list(self.bounds[1])}
         out["obstacles"] = [{"polygon": [list(p) for p in poly]} for poly in self.polygons]
         out["obstacles"] += [{"disc": {"center": list(c), "radius": r}} for c, r in self.discs]
-        return out
+        return json_object(out)
 
 
 def _show(value: object, limit: int = 60) -> str:

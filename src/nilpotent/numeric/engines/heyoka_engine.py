@@ -98,7 +98,7 @@ import sympy as sp
 
 from nilpotent.errors import MissingExtraError, OptionError
 from nilpotent.numeric.compile import CompiledSystem
-from nilpotent.numeric.engines import Engine, EngineOutput
+from nilpotent.numeric.engines.base import Engine, EngineOutput
 from nilpotent.numeric.engines.heyoka_events import run_chunk
 from nilpotent.numeric.engines.heyoka_setup import (
     quiet_logger,

@@ -42,7 +42,7 @@ import sympy as sp
 from sympy.core.sympify import _sympify as _strict_sympy
 from sympy.printing.str import StrPrinter
 
-from nilpotent.core.linear_printer import print_linear
+from nilpotent.core.model.linear_printer import print_linear
 from nilpotent.errors import ComputationLimitError, ExpressionError
 
 __all__ = [
@@ -54,6 +54,7 @@ __all__ = [
     "MAX_LENGTH",
     "RESERVED_NAMES",
     "as_expr",
+    "exact_decimals",
     "format_expression",
     "parse_expression",
     "real_value",
@@ -420,8 +421,8 @@ def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "
     if terms > MAX_TERMS:
         raise ComputationLimitError(
             f"{prefix}{_shorten(text)} would expand to about {terms:.3g} terms, above the "
-            f"limit {MAX_TERMS:,} (nilpotent.core.expressions.MAX_TERMS); brackets and Taylor "
-            "expansions expand it: write the system with fewer or smaller powers")
+            f"limit {MAX_TERMS:,} (nilpotent.core.model.expressions.MAX_TERMS); brackets and "
+            "Taylor expansions expand it: write the system with fewer or smaller powers")
     return result
 
 
@@ -604,6 +605,31 @@ def as_expr(value: object) -> sp.Expr:
     if not isinstance(expr, sp.Expr):
         raise TypeError(f"{value!r} is not a scalar expression")
     return expr
+
+
+def _decimal_rational(f: float | sp.Float) -> sp.Expr:
+    """The exact rational a decimal denotes: the shortest decimal that reads back as the float."""
+    if isinstance(f, sp.Float) and f._prec != 53:
+        return sp.Rational(str(f))
+    return sp.Rational(repr(float(f)))
+
+
+def exact_decimals(expr: object) -> sp.Expr:
+    """``expr`` with every decimal (float) replaced by the exact rational it denotes.
+
+    ``0.7`` becomes ``7/10`` (the shortest decimal that reads back as the double),
+    so that decimals are decided exactly like fractions.
+
+    Examples
+    --------
+    >>> exact_decimals(sp.Float(0.7) * sp.Symbol("x"))
+    7*x/10
+    """
+    e = as_expr(expr)
+    floats = e.atoms(sp.Float)
+    if not floats:
+        return e
+    return as_expr(e.xreplace({f: _decimal_rational(f) for f in floats}))
 
 
 def _float_value(expr: sp.Basic) -> float:

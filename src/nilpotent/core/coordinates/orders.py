@@ -17,15 +17,15 @@ from collections.abc import Sequence
 import symengine as se
 import sympy as sp
 
-from nilpotent.core.brackets import (
+from nilpotent.core.coordinates.jets import Poly, ZeroTest, lie_derivative, weighted_degree
+from nilpotent.core.lie.brackets import (
     se_coordinates,
     se_lie_derivative,
     to_symengine,
     word_field_symengine,
 )
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.system import ControlSystem
-from nilpotent.core.taylor import Poly, ZeroTest, lie_derivative, weighted_degree
+from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 
 Order = int | float

@@ -10,7 +10,7 @@ Nonholonomic Systems*, 2014, §2.2.2) give $x$ as a function of the new coordina
 
 each computed by Picard iteration on weighted jets truncated at the weighted degree
 needed, then inverted as a series (:func:`from_exponential_map`).  The builders of
-:mod:`nilpotent.core.privileged` call these; ``ctx`` is that module's context (the
+:mod:`nilpotent.core.coordinates.privileged` call these; ``ctx`` is that module's context (the
 system, the point, the filtration, the weights and the linear adapted map ``A``).
 """
 
@@ -21,12 +21,12 @@ from typing import TYPE_CHECKING
 
 import symengine as se
 
-from nilpotent.core.brackets import SeField, Word, word_field_symengine
-from nilpotent.core.taylor import Poly, to_symengine, weighted_degree, weighted_jets
+from nilpotent.core.coordinates.jets import Poly, to_symengine, weighted_degree, weighted_jets
+from nilpotent.core.lie.brackets import SeField, Word, word_field_symengine
 from nilpotent.errors import ComputationLimitError
 
 if TYPE_CHECKING:
-    from nilpotent.core.privileged import Built, _Context
+    from nilpotent.core.coordinates.privileged import Built, FrameContext
 
 __all__ = ["exponential_grading", "exponential_map", "first_kind_map", "from_exponential_map"]
 
@@ -40,7 +40,7 @@ def integrate(poly: Poly, k: int) -> Poly:
     return Poly(poly.nvars, terms)
 
 
-def exponential_map(ctx: _Context, degree: int) -> list[Poly]:
+def exponential_map(ctx: FrameContext, degree: int) -> list[Poly]:
     r"""$E(s) = \exp(s_nY_n)\circ\cdots\circ\exp(s_1Y_1)(p)$ in $x$, to weighted degree ``degree``.
 
     Each flow by Picard iteration $x \leftarrow E_{l-1} + \int_0^{s_l} Y_l(x)$ on
@@ -69,12 +69,12 @@ def exponential_map(ctx: _Context, degree: int) -> list[Poly]:
     return E
 
 
-def frame_field(ctx: _Context, word: Word) -> SeField:
+def frame_field(ctx: FrameContext, word: Word) -> SeField:
     r"""The field of a frame word in symengine: expanded, or else the bracket of its halves.
 
-    The expanded field (:func:`~nilpotent.core.brackets.word_field_symengine`, cached on
+    The expanded field (:func:`~nilpotent.core.lie.brackets.word_field_symengine`, cached on
     the system) where its size is within
-    :data:`~nilpotent.core.brackets.EXPANSION_TERMS_BUDGET`; past it, $[u, v] =
+    :data:`~nilpotent.core.lie.brackets.EXPANSION_TERMS_BUDGET`; past it, $[u, v] =
     Dv\cdot u - Du\cdot v$ written with the fields of $u$ and $v$ and left unexpanded
     (only low-order jets of the longest words are ever taken, and the series of the
     unexpanded form never builds the expansion).  Cached on ``ctx``.
@@ -101,7 +101,7 @@ def frame_field(ctx: _Context, word: Word) -> SeField:
 
 
 def frame_jets_along(
-    ctx: _Context,
+    ctx: FrameContext,
     l: int,
     cur: Sequence[Poly],
     degree: int,
@@ -161,7 +161,7 @@ def exponential_grading(weights: Sequence[int], chi: Sequence[Poly]) -> list[int
     return [min(weighted_degree(m, weights) for m in c.terms) for c in chi]
 
 
-def first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
+def first_kind_map(ctx: FrameContext, degree: int) -> list[Poly]:
     r"""$E_1(y) = \exp(\sum_j y_j Y_j)(p)$ in $x$, to weighted degree ``degree``.
 
     The flow $x(\tau)$ of $Z = \sum_j y_j Y_j$ from $p$, by Picard iteration
@@ -198,7 +198,7 @@ def first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
     return out
 
 
-def from_exponential_map(ctx: _Context, E: Sequence[Poly]) -> Built:
+def from_exponential_map(ctx: FrameContext, E: Sequence[Poly]) -> Built:
     """Coordinates defined by $x = E(y)$ (weighted degree <= r); forward: the series inverse."""
     n, w = ctx.n, ctx.weights
     r = max(w)

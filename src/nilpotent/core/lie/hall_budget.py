@@ -1,4 +1,4 @@
-"""The budget on the Hall words that :func:`nilpotent.core.filtration.analyze` examines at a point.
+"""The budget on the Hall words that :func:`~nilpotent.core.analysis.analyze` examines at p.
 
 At a singular point the span of the brackets can stall for some lengths and
 grow later, so the search at the point goes through every Hall word of each

@@ -1,6 +1,6 @@
 r"""Values at a point of fields given as polynomials in coordinates and atoms.
 
-The fields of :mod:`nilpotent.core.polynomial_fields` are polynomials over
+The fields of :mod:`nilpotent.core.lie.polynomial_fields` are polynomials over
 $\mathbb{Q}$ in the coordinates and elementary atoms; :class:`PointValues`
 gives their values at one point:
 
@@ -9,7 +9,7 @@ gives their values at one point:
   exact evaluation), its value is an exact rational (FLINT evaluation at
   integers, with a common denominator as the homogenising variable $h$);
 * *balls*: otherwise each variable is enclosed in an ``arb`` ball
-  $m_i \pm r_i$ (the atoms by :class:`nilpotent.core.evaluation.Evaluator`),
+  $m_i \pm r_i$ (the atoms by :class:`nilpotent.core.decide.evaluation.Evaluator`),
   the polynomial is evaluated exactly at the dyadic midpoints $m = M/2^e$ (as
   $P(M, 2^e)/2^{e \deg P}$) and the result widened by a rigorous bound of
   $|P(v) - P(m)|$ over the box:
@@ -18,7 +18,7 @@ gives their values at one point:
   variable $i$ (mean-value theorem, term by term).  The variables are enclosed
   with as many more bits than asked as $\|P\|_1 d$ has, so that the bound stays
   near $2^{-P}$ of the largest terms.  The enclosures are certified like every
-  other ball of :mod:`nilpotent.core.spans`.
+  other ball of :mod:`nilpotent.core.decide.spans`.
 
 An atom without a value at the point (``1/a`` at ``a = 0``, needed only for
 derivatives of ``sqrt(a)``) is an error only for the polynomials that use it.
@@ -33,8 +33,8 @@ import flint
 import symengine as se
 from flint import arb, fmpq
 
-from nilpotent.core.evaluation import Evaluator, Inaccurate, NotEvaluable, exact_value
-from nilpotent.core.polynomial_fields import AtomUndefined, HPoly, PolynomialFields
+from nilpotent.core.decide.evaluation import Evaluator, Inaccurate, NotEvaluable, exact_value
+from nilpotent.core.lie.polynomial_fields import AtomUndefined, HPoly, PolynomialFields
 
 __all__ = ["PointValues"]
 
@@ -121,7 +121,7 @@ class PointValues:
         hit = self._balls.get(prec)
         if hit is not None:
             return hit
-        from nilpotent.core.evaluation import ball
+        from nilpotent.core.decide.evaluation import ball
 
         exact = self.exact_vars()
         old = flint.ctx.prec

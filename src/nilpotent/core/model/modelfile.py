@@ -18,7 +18,7 @@ The format (see ``docs/model-files.md``)::
 
 JSON files hold the same structure (``{"coordinates": [...], "fields": [{...}]}``).
 
-Components are parsed by :func:`nilpotent.core.expressions.parse_expression`
+Components are parsed by :func:`nilpotent.core.model.expressions.parse_expression`
 with the coordinate and parameter names; user text never reaches ``eval``.
 Coordinates become plain :class:`sympy.Symbol` objects; parameters appear in
 the fields as ``sympy.Symbol(name)`` and their values are stored in
@@ -41,22 +41,22 @@ from typing import Any
 
 import sympy as sp
 
-from nilpotent.core.datafile import (  # noqa: F401  (re-exported: the limits of a file)
+from nilpotent.core.model.datafile import (  # noqa: F401  (re-exported: the limits of a file)
     MAX_FILE_BYTES,
     MAX_INT_DIGITS,
     SUFFIXES,
     file_suffix,
     read_data_file,
 )
-from nilpotent.core.expressions import (
+from nilpotent.core.model.expressions import (
     MAX_BITS,
     RESERVED_NAMES,
     format_expression,
     parse_expression,
     real_value,
 )
-from nilpotent.core.outline import Limits, Outline
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Limits, Outline
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, ExpressionError, ModelError
 from nilpotent.strict_json import json_text
 
@@ -92,7 +92,7 @@ def _limit(source: str, what: str, count: int, limit: int, name: str) -> None:
     if count > limit:
         raise ComputationLimitError(
             f"{source}: {count:,} {what}, above the limit {limit:,} of a model file "
-            f"(nilpotent.core.modelfile.{name})"
+            f"(nilpotent.core.model.modelfile.{name})"
         )
 
 
@@ -145,7 +145,7 @@ def _check_name(name: object, what: str, source: str) -> str:
     if len(name) > MAX_NAME_LENGTH:
         raise ComputationLimitError(
             f"{source}: {what} {_show(name)} has {len(name):,} characters, above the limit "
-            f"{MAX_NAME_LENGTH} of a name (nilpotent.core.modelfile.MAX_NAME_LENGTH)"
+            f"{MAX_NAME_LENGTH} of a name (nilpotent.core.model.modelfile.MAX_NAME_LENGTH)"
         )
     if not name.isidentifier() or unicodedata.normalize("NFKC", name) != name:
         raise ModelError(
@@ -373,7 +373,7 @@ def outline_from_dict(raw: object, names: Mapping[str, sp.Symbol], source: str) 
     """The ``[geometry]`` table: ``polygons``, ``segments``, ``discs`` (INTERFACE.md).
 
     Every number is an expression of the coordinates and parameters (the safe
-    grammar of :mod:`nilpotent.core.expressions`).
+    grammar of :mod:`nilpotent.core.model.expressions`).
 
     Raises
     ------
@@ -490,10 +490,10 @@ def load_model_file(path: str | Path) -> ControlSystem:
     ------
     ModelError
         Unknown suffix, unreadable or non-regular file, syntax error (with its line),
-        a duplicate JSON key (:func:`nilpotent.core.datafile.read_data_file`), or any
+        a duplicate JSON key (:func:`nilpotent.core.model.datafile.read_data_file`), or any
         problem :func:`system_from_dict` reports.
     ComputationLimitError
-        A file larger than :data:`nilpotent.core.datafile.MAX_FILE_BYTES`.
+        A file larger than :data:`nilpotent.core.model.datafile.MAX_FILE_BYTES`.
     ExpressionError
         A component outside the expression grammar.
     """

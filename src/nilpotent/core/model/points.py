@@ -2,7 +2,7 @@
 
 A point (``--at``, ``--from``, ``--to``) names some coordinates of a system;
 the unnamed ones are 0.  Values go through the expression grammar
-(:func:`nilpotent.core.expressions.parse_expression`) with no names but ``pi``
+(:func:`nilpotent.core.model.expressions.parse_expression`) with no names but ``pi``
 and ``E``, so they are constants: exact where written exactly (``pi/3``,
 ``1/2``, ``sqrt(2)``); decimals are read as the exact rationals they denote
 (``0.7`` is ``7/10``, ``1e-300`` is ``10**-300``).  They must be finite real
@@ -25,9 +25,13 @@ from collections.abc import Sequence
 
 import sympy as sp
 
-from nilpotent.core.expressions import format_expression, parse_expression, real_value
-from nilpotent.core.spans import exact_decimals
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.expressions import (
+    exact_decimals,
+    format_expression,
+    parse_expression,
+    real_value,
+)
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ExpressionError, ModelError, NilpotentError, OptionError, PointError
 
 __all__ = [

@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 from flint import arb, arb_mat, fmpq, fmpq_mat
 
-from nilpotent.core.evaluation import (
+from nilpotent.core.decide.evaluation import (
     START_PRECISION_BITS,
     Evaluator,
     Inaccurate,
@@ -59,11 +59,11 @@ from nilpotent.core.evaluation import (
     NotRational,
     SymbolicEvaluator,
     ball,
-    exact_decimals,
     exact_value,
     precision,
     to_double,
 )
+from nilpotent.core.model.expressions import exact_decimals
 
 __all__ = [
     "ALGEBRAIC_BUDGET",
@@ -131,7 +131,7 @@ class Vector(abc.ABC):
         """Exact values of the vector's polynomial form at a random free point, or None.
 
         A vector given by polynomials in variables (coordinates and atoms,
-        :mod:`nilpotent.core.polynomial_fields`) evaluated at a pseudo-random
+        :mod:`nilpotent.core.lie.polynomial_fields`) evaluated at a pseudo-random
         integer point where the variables are treated as independent: a
         dependence found there is a polynomial identity (Schwartz-Zippel),
         true at every point.  Used only by a probabilistic :class:`Span`.

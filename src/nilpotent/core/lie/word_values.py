@@ -1,7 +1,7 @@
-"""Values of bracket words at a point, for the rank engine (:mod:`nilpotent.core.spans`).
+"""Values of bracket words at a point, for the rank engine (:mod:`nilpotent.core.decide.spans`).
 
 :class:`WordValues` evaluates words at one point as
-:class:`~nilpotent.core.spans.Vector` objects: exact rationals, certified arb
+:class:`~nilpotent.core.decide.spans.Vector` objects: exact rationals, certified arb
 balls at any precision, or exact symengine numbers, all by forward-mode
 directional derivatives of the fields of the word's halves (so the field of the
 longest words is never expanded).  Bracket convention $[X,Y] = DY\\cdot X - DX\\cdot Y$.
@@ -15,17 +15,7 @@ import flint
 import symengine as se
 import sympy as sp
 
-from nilpotent.core.brackets import (
-    Word,
-    is_built,
-    se_coordinates,
-    to_symengine,
-    to_sympy,
-    word_field_symengine,
-)
-from nilpotent.core.polynomial_fields import AtomUndefined, PolynomialFields, polynomial_fields
-from nilpotent.core.polynomial_values import PointValues
-from nilpotent.core.spans import (
+from nilpotent.core.decide.spans import (
     Evaluator,
     Inaccurate,
     NotEvaluable,
@@ -35,7 +25,17 @@ from nilpotent.core.spans import (
     ball,
     exact_value,
 )
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.lie.brackets import (
+    Word,
+    is_built,
+    se_coordinates,
+    to_symengine,
+    to_sympy,
+    word_field_symengine,
+)
+from nilpotent.core.lie.polynomial_fields import AtomUndefined, PolynomialFields, polynomial_fields
+from nilpotent.core.lie.polynomial_values import PointValues
+from nilpotent.core.model.system import ControlSystem
 
 __all__ = ["Undefined", "WordValues"]
 
@@ -45,10 +45,10 @@ class Undefined(Exception):
 
 
 class WordValues:
-    """Values of bracket words at one point, as :class:`~nilpotent.core.spans.Vector` objects.
+    """Values of bracket words at one point, as :class:`~nilpotent.core.decide.spans.Vector` values.
 
     When the fields have a polynomial form in the coordinates and elementary
-    atoms (:mod:`nilpotent.core.polynomial_fields`: every model built from the
+    atoms (:mod:`nilpotent.core.lie.polynomial_fields`: every model built from the
     grammar's polynomial, rational and elementary functions), exact rationals
     and balls come from the word's polynomial field, built by FLINT; its value
     is exact when the coordinates and the atoms are rational at the point
@@ -138,7 +138,7 @@ class WordValues:
     def free(self, word: Word) -> list | None:
         """Exact values of the word's polynomial form at a pseudo-random free point, or None.
 
-        See :meth:`nilpotent.core.polynomial_fields.PolynomialFields.free_field`.
+        See :meth:`nilpotent.core.lie.polynomial_fields.PolynomialFields.free_field`.
         """
         if self._poly is None:
             return None

@@ -1,6 +1,6 @@
 r"""Evaluation of constants: exact rationals, certified arb balls, exact symengine numbers.
 
-The numbers under every decision of :mod:`nilpotent.core.spans`:
+The numbers under every decision of :mod:`nilpotent.core.decide.spans`:
 
 * :func:`exact_value`: the exact rational value of a constant (decimals read
   as the rationals they denote, :func:`exact_decimals`), or ``None``;
@@ -20,10 +20,9 @@ from typing import Any, TypeAlias
 
 import flint
 import symengine as se
-import sympy as sp
 from flint import arb, fmpq
 
-from nilpotent.core.expressions import as_expr
+from nilpotent.core.model.expressions import exact_decimals
 
 #: A value of :class:`Evaluator`: an exact ``fmpq`` (exact mode) or an ``arb`` ball.
 #: python-flint's stubs do not describe arithmetic mixing the two, hence ``Any``.
@@ -56,34 +55,6 @@ class NotRational(Exception):
 
 class Inaccurate(Exception):
     """A ball evaluation lost all accuracy (e.g. ``sqrt`` of a ball around 0)."""
-
-
-# --- decimals ---------------------------------------------------------------------------
-
-
-def _decimal_rational(f: float | sp.Float) -> sp.Expr:
-    """The exact rational a decimal denotes: the shortest decimal that reads back as the float."""
-    if isinstance(f, sp.Float) and f._prec != 53:
-        return sp.Rational(str(f))
-    return sp.Rational(repr(float(f)))
-
-
-def exact_decimals(expr: object) -> sp.Expr:
-    """``expr`` with every decimal (float) replaced by the exact rational it denotes.
-
-    ``0.7`` becomes ``7/10`` (the shortest decimal that reads back as the double),
-    so that decimals are decided exactly like fractions.
-
-    Examples
-    --------
-    >>> exact_decimals(sp.Float(0.7) * sp.Symbol("x"))
-    7*x/10
-    """
-    e = as_expr(expr)
-    floats = e.atoms(sp.Float)
-    if not floats:
-        return e
-    return as_expr(e.xreplace({f: _decimal_rational(f) for f in floats}))
 
 
 # --- evaluation of constant expressions ---------------------------------------------------

@@ -4,7 +4,7 @@ Coordinates $y$ centred at $p$ are *privileged* when the non-holonomic order
 of each $y_j$ at $p$ equals the weight $w_j$ (``MATH.md`` §3–4).  All methods
 start from the **linear adapted coordinates** $z = A(x - p)$, $A = B^{-1}$,
 where the columns of $B$ are the values $Y_1(p), \dots, Y_n(p)$ of the adapted
-frame of :func:`nilpotent.core.filtration.analyze`, and describe the
+frame of :func:`nilpotent.core.analysis.filtration.analyze`, and describe the
 coordinates by two polynomial maps: $y = \psi(z)$ (``forward``) and
 $z = \chi(y)$ (``inverse``); then $x = p + B\chi(y)$.
 
@@ -66,17 +66,13 @@ import symengine as se
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.exponential_map import (
+from nilpotent.core.analysis.filtration import Filtration, analyze
+from nilpotent.core.coordinates.exponential_map import (
     exponential_map,
     first_kind_map,
     from_exponential_map,
 )
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.filtration import Filtration, analyze
-from nilpotent.core.orders import chain_order_homogeneous, low_order_terms
-from nilpotent.core.spans import to_double
-from nilpotent.core.system import ControlSystem
-from nilpotent.core.taylor import (
+from nilpotent.core.coordinates.jets import (
     Poly,
     ZeroTest,
     lie_derivative,
@@ -84,6 +80,10 @@ from nilpotent.core.taylor import (
     weighted_degree,
     weighted_jets,
 )
+from nilpotent.core.coordinates.orders import chain_order_homogeneous, low_order_terms
+from nilpotent.core.decide.spans import to_double
+from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import (
     ComputationLimitError,
     NotBracketGeneratingError,
@@ -133,10 +133,10 @@ class PrivilegedCoordinates:
     linear_part:
         $A = B^{-1}$ ($z = A(x - p)$, the linear adapted coordinates).
     forward_poly:
-        $y_j$ as :class:`~nilpotent.core.taylor.Poly` in the linear adapted
+        $y_j$ as :class:`~nilpotent.core.coordinates.jets.Poly` in the linear adapted
         coordinates $z$ (the exact form of ``forward``).
     inverse_poly:
-        $z_k$ as :class:`~nilpotent.core.taylor.Poly` in $y$ (the exact form of
+        $z_k$ as :class:`~nilpotent.core.coordinates.jets.Poly` in $y$ (the exact form of
         ``inverse``, before $x = p + Bz$).
     """
 
@@ -192,7 +192,7 @@ class PrivilegedCoordinates:
         """
         key = ("field_jets", extra)
         if key not in self._cache:
-            ctx = _Context.of(self.filtration, self.numeric)
+            ctx = FrameContext.of(self.filtration, self.numeric)
             degrees = [w - 1 + extra for w in self.weights]
             self._cache[key] = _fields_in(
                 ctx, self.forward_poly, self.inverse_poly, self.weights, degrees
@@ -238,7 +238,7 @@ class PrivilegedCoordinates:
 # --- shared context ----------------------------------------------------------------
 
 
-class _Context:
+class FrameContext:
     """What every construction needs: frame matrices, fields in symengine, the zero test."""
 
     def __init__(self, filtration: Filtration, numeric: bool) -> None:
@@ -270,11 +270,11 @@ class _Context:
         self.zero = ZeroTest()
 
     @staticmethod
-    def of(filtration: Filtration, numeric: bool = False) -> _Context:
+    def of(filtration: Filtration, numeric: bool = False) -> FrameContext:
         cache = filtration.system._cache.setdefault("privileged.contexts", {})
         key = (filtration.point, filtration.frame, numeric)
         if key not in cache:
-            cache[key] = _Context(filtration, numeric)
+            cache[key] = FrameContext(filtration, numeric)
         return cache[key]
 
     def x_of(self, inverse_poly: Sequence[Poly]) -> list[Poly]:
@@ -313,7 +313,7 @@ def _identity(n: int) -> tuple[Poly, ...]:
 
 
 def _fields_in(
-    ctx: _Context,
+    ctx: FrameContext,
     forward_poly: Sequence[Poly],
     inverse_poly: Sequence[Poly],
     weights: Sequence[int],
@@ -358,7 +358,7 @@ def _fields_in(
 
 
 def _chain_order(
-    ctx: _Context,
+    ctx: FrameContext,
     forward_poly: Sequence[Poly],
     inverse_poly: Sequence[Poly],
     f: Poly,
@@ -391,7 +391,7 @@ def _chain_order(
 
 
 def _certified_orders(
-    ctx: _Context,
+    ctx: FrameContext,
     forward_poly: Sequence[Poly],
     inverse_poly: Sequence[Poly],
     *,
@@ -430,7 +430,7 @@ def _certified_orders(
     return tuple(orders), jets
 
 
-def _reference_inverse(ctx: _Context) -> tuple[Poly, ...] | None:
+def _reference_inverse(ctx: FrameContext) -> tuple[Poly, ...] | None:
     """$z$ as polynomials in Bellaïche's coordinates, when their certificate passes."""
     forward, inverse = _algebraic(ctx)[:2]
     orders, _ = _certified_orders(ctx, forward, inverse, quick=True, use_reference=False)
@@ -446,12 +446,12 @@ Built = tuple[tuple[Poly, ...], tuple[Poly, ...], bool, int | None, bool, int | 
 """(forward_poly, inverse_poly, inverse_exact, inverse_order, forward_exact, forward_order)."""
 
 
-def _linear(ctx: _Context) -> Built:
+def _linear(ctx: FrameContext) -> Built:
     ident = _identity(ctx.n)
     return ident, ident, True, None, True, None
 
 
-def _algebraic(ctx: _Context) -> Built:
+def _algebraic(ctx: FrameContext) -> Built:
     n, w = ctx.n, ctx.weights
     if max(w) <= 2:
         return _linear(ctx)
@@ -482,15 +482,15 @@ def _algebraic(ctx: _Context) -> Built:
     return tuple(forward), tuple(inverse), True, None, True, None
 
 
-def _exponential(ctx: _Context) -> Built:
+def _exponential(ctx: FrameContext) -> Built:
     return from_exponential_map(ctx, exponential_map(ctx, max(ctx.weights)))
 
 
-def _exponential_first_kind(ctx: _Context) -> Built:
+def _exponential_first_kind(ctx: FrameContext) -> Built:
     return from_exponential_map(ctx, first_kind_map(ctx, max(ctx.weights)))
 
 
-METHODS: dict[str, Callable[[_Context], Built]] = {
+METHODS: dict[str, Callable[[FrameContext], Built]] = {
     "linear": _linear,
     "algebraic": _algebraic,
     "exponential": _exponential,
@@ -502,7 +502,7 @@ accepted by :func:`privileged_coordinates` besides these."""
 
 def coordinate_orders(coords: PrivilegedCoordinates) -> tuple[int | float, ...]:
     r"""Recompute $\mathrm{ord}_p(y_j)$ from the polynomial maps of ``coords`` (module doc)."""
-    ctx = _Context.of(coords.filtration, coords.numeric)
+    ctx = FrameContext.of(coords.filtration, coords.numeric)
     orders, _ = _certified_orders(ctx, coords.forward_poly, coords.inverse_poly)
     assert orders is not None
     return orders
@@ -534,7 +534,7 @@ def coordinate_names(sys: ControlSystem) -> tuple[sp.Symbol, ...]:
     return tuple(sp.Symbol(f"y_priv{k}") for k in range(1, sys.n + 1))
 
 
-def _to_sympy_in_x(ctx: _Context, polys: Sequence[Poly]) -> tuple[sp.Expr, ...]:
+def _to_sympy_in_x(ctx: FrameContext, polys: Sequence[Poly]) -> tuple[sp.Expr, ...]:
     """Polynomials in $z$ written in the model coordinates, in powers of $x_k - p_k$."""
     n = ctx.n
     d = [Poly.variable(n, k) for k in range(n)]
@@ -567,7 +567,7 @@ def privileged_coordinates(
     method:
         ``"auto"`` (default), or a name in :data:`METHODS`.
     filtration:
-        A precomputed :func:`~nilpotent.core.filtration.analyze` result at $p$.
+        A precomputed :func:`~nilpotent.core.analysis.filtration.analyze` result at $p$.
     numeric:
         ``False``: exact coefficients; ``True``: floating-point coefficients
         (15 digits); ``None`` (default): exact unless the values of the fields
@@ -577,7 +577,7 @@ def privileged_coordinates(
         result says which in ``numeric``.
     max_length:
         Longest bracket length examined at $p$ (see
-        :func:`~nilpotent.core.filtration.analyze`; default automatic, raised
+        :func:`~nilpotent.core.analysis.filtration.analyze`; default automatic, raised
         within a budget while the search is exhausted before the dimension).
 
     Returns
@@ -634,7 +634,7 @@ def privileged_coordinates(
         )
     if numeric is None:
         numeric = needs_floats(f)
-    ctx = _Context.of(f, numeric)
+    ctx = FrameContext.of(f, numeric)
     if method == "auto":
         built = _linear(ctx)
         orders, jets = _certified_orders(ctx, built[0], built[1], quick=True)

@@ -1,10 +1,10 @@
 r"""The nilpotent approximation of a system at a point, and its certificate.
 
-In privileged coordinates $y$ at $p$ (:mod:`nilpotent.core.privileged`) write
+In privileged coordinates $y$ at $p$ (:mod:`nilpotent.core.coordinates.privileged`) write
 $X_i = \sum_j f_{ij}(y)\,\partial_{y_j}$.  Each $f_{ij}$ has weighted order
 $\ge w_j - 1$; keeping in $f_{ij}$ exactly its terms of weighted degree
 $w_j - 1$ gives $\hat X_i$ (``MATH.md`` §5).  Only the weighted Taylor jets of
-the fields to degree $w_j$ are computed (:func:`nilpotent.core.taylor.weighted_jets`:
+the fields to degree $w_j$ are computed (:func:`nilpotent.core.coordinates.jets.weighted_jets`:
 $y_k \to t^{w_k} y_k$ and one univariate series in $t$), never a full
 expansion.
 
@@ -29,24 +29,25 @@ import symengine as se
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.exponential_map import exponential_grading
-from nilpotent.core.filtration import Filtration
-from nilpotent.core.privileged import (
-    PrivilegedCoordinates,
-    _Context,
-    coordinate_orders,
-    privileged_coordinates,
-)
-from nilpotent.core.spans import Decision, ExprVector, MeasuredSpan, Span
-from nilpotent.core.system import ControlSystem
-from nilpotent.core.taylor import (
+from nilpotent.core.analysis.filtration import Filtration
+from nilpotent.core.coordinates.exponential_map import exponential_grading
+from nilpotent.core.coordinates.jets import (
     Poly,
     ZeroTest,
     bracket,
     to_symengine,
 )
+from nilpotent.core.coordinates.privileged import (
+    FrameContext,
+    PrivilegedCoordinates,
+    coordinate_orders,
+    privileged_coordinates,
+)
+from nilpotent.core.decide.spans import Decision, ExprVector, MeasuredSpan, Span
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 from nilpotent.progress import progress
+from nilpotent.strict_json import json_object
 
 __all__ = ["Certificate", "NilpotentApproximation", "approximate", "certify"]
 
@@ -265,7 +266,7 @@ class NilpotentApproximation:
         (names, expressions, inverse, exactness), ``fields``, ``fields_x`` and
         ``certificate``.
         """
-        from nilpotent.core.expressions import format_expression
+        from nilpotent.core.model.expressions import format_expression
 
         coords = self.coordinates
         cert = self.certificate
@@ -298,7 +299,7 @@ class NilpotentApproximation:
             "ok": cert.ok,
             "failures": list(cert.failures()),
         }
-        return payload
+        return json_object(payload)
 
     # --- display (nilpotent.typeset) -------------------------------------------------
     def to_latex(self) -> str:
@@ -357,7 +358,7 @@ def _homogeneous(
 
 
 class _Echelon:
-    """Incremental rank of sparse coefficient vectors, through :mod:`nilpotent.core.spans`.
+    """Incremental rank of sparse coefficient vectors, through :mod:`nilpotent.core.decide.spans`.
 
     Exact coefficients are decided by the certified engine (:class:`Span`);
     floating-point coefficients (approximations at transcendental points) by a
@@ -470,7 +471,7 @@ def _pushforward_ok(
     $j$ is compared up to weighted degree $w_j$ (exact coordinates) or $w_j - 1$.
     """
     coords = approx.coordinates
-    ctx = _Context.of(approx.filtration, approx.coordinates.numeric)
+    ctx = FrameContext.of(approx.filtration, approx.coordinates.numeric)
     w = coords.weights
     n = coords.n
     exact = coords.inverse_exact and coords.forward_exact and approx.fields_x_exact
@@ -535,7 +536,7 @@ def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -
     jets = coords.field_jets(extra=1)
     rem = _remainder_orders(jets, hat, w, zero)
     push = _pushforward_ok(approx, hat, zero)
-    ctx_zero = _Context.of(approx.filtration, approx.coordinates.numeric).zero
+    ctx_zero = FrameContext.of(approx.filtration, approx.coordinates.numeric).zero
     orders = coordinate_orders(coords) if recompute_orders else coords.orders
     return Certificate(
         orders=tuple(orders),
@@ -561,7 +562,7 @@ def _pushforward(
     coords: PrivilegedCoordinates, hat: Sequence[Sequence[Poly]]
 ) -> tuple[tuple[tuple[sp.Expr, ...], ...], bool]:
     r"""$[\hat X]_x = B\,(\partial\chi/\partial y)(\psi(z))\,\hat X(\psi(z))$ at $z = A(x - p)$."""
-    ctx = _Context.of(coords.filtration, coords.numeric)
+    ctx = FrameContext.of(coords.filtration, coords.numeric)
     n = coords.n
     exact = coords.forward_exact and coords.inverse_exact
     omega = exponential_grading(coords.weights, coords.inverse_poly)  # ord(z_k), privileged.py
@@ -622,12 +623,12 @@ def approximate(
     numeric:
         ``True`` for floating-point coefficients, ``False`` for exact ones,
         ``None`` (default) for exact unless the values at the point are
-        transcendental (see :func:`~nilpotent.core.privileged.privileged_coordinates`);
+        transcendental (see :func:`~nilpotent.core.coordinates.privileged.privileged_coordinates`);
         ``coordinates.numeric`` and the printed output say which.
     max_length:
         Longest bracket length examined at $p$ (default automatic: raised
         within a budget while the search is exhausted before the dimension;
-        see :func:`~nilpotent.core.filtration.analyze`).
+        see :func:`~nilpotent.core.analysis.filtration.analyze`).
 
     Returns
     -------
@@ -668,7 +669,7 @@ def approximate(
 def _approximation(sys: ControlSystem, coords: PrivilegedCoordinates) -> NilpotentApproximation:
     """The approximation in ``coords`` (its certificate not computed yet)."""
     w = coords.weights
-    ctx = _Context.of(coords.filtration, coords.numeric)
+    ctx = FrameContext.of(coords.filtration, coords.numeric)
     jets = coords.field_jets(extra=1)
     hat = [
         tuple(c.homogeneous_part(w, w[j] - 1).drop_zeros(ctx.zero) for j, c in enumerate(comps))

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from nilpotent.core.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr
 from nilpotent.errors import ModelError
 
 __all__ = ["Limits", "Outline"]

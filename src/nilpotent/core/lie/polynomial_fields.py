@@ -19,7 +19,7 @@ length 10 takes about half a minute.  No identity between atoms
 values are exactly the values of the fields.
 
 Values at a point (exact rationals, or certified arb balls):
-:mod:`nilpotent.core.polynomial_values`.  A dependence found at a random
+:mod:`nilpotent.core.lie.polynomial_values`.  A dependence found at a random
 *free* point (the coordinates and atoms treated as independent variables,
 :meth:`PolynomialFields.free_field`) is a polynomial identity.
 
@@ -41,14 +41,14 @@ from fractions import Fraction
 import symengine as se
 from flint import fmpq, fmpq_mpoly, fmpq_mpoly_ctx
 
-from nilpotent.core.brackets import (
+from nilpotent.core.lie.brackets import (
     EXPANSION_TERMS_BUDGET,
     Word,
     format_word,
     se_coordinates,
     word_field_symengine,
 )
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError
 
 __all__ = ["AtomUndefined", "HPoly", "PolynomialFields", "Unsupported", "polynomial_fields"]
@@ -277,7 +277,7 @@ class PolynomialFields:
             raise ComputationLimitError(
                 f"the field of {format_word(word)} of {self.sys.name!r} would expand to up to "
                 f"{a.terms * b.terms:,} terms in one product (budget EXPANSION_TERMS_BUDGET = "
-                f"{EXPANSION_TERMS_BUDGET:,} in nilpotent.core.brackets): refused instead of "
+                f"{EXPANSION_TERMS_BUDGET:,} in nilpotent.core.lie.brackets): refused instead of "
                 "exhausting memory; a smaller model is needed"
             )
         return HPoly(a.poly * b.poly, a.deg + b.deg)
@@ -469,7 +469,7 @@ def _canonical(word: Word) -> tuple[Word, int]:
 
 
 def _order(word: Word) -> tuple[int, str]:
-    from nilpotent.core.brackets import word_length
+    from nilpotent.core.lie.brackets import word_length
 
     return word_length(word), repr(word)
 

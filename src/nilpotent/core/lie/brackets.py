@@ -24,7 +24,7 @@ from typing import TypeAlias
 import symengine as se
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, OptionError, PointError
 
 Word: TypeAlias = "int | tuple[Word, Word]"
@@ -322,7 +322,7 @@ def _check_expansion(sys: ControlSystem, word: Word, bound: int) -> None:
         raise ComputationLimitError(
             f"the field of {format_word(word)} of {sys.name!r} would expand to up to "
             f"{bound:,} terms per component (budget EXPANSION_TERMS_BUDGET = "
-            f"{EXPANSION_TERMS_BUDGET:,} in nilpotent.core.brackets): refused instead of "
+            f"{EXPANSION_TERMS_BUDGET:,} in nilpotent.core.lie.brackets): refused instead of "
             "exhausting memory; a smaller model (or expanded fields) is needed"
         )
 

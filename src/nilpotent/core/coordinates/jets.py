@@ -22,7 +22,7 @@ Zero tests
     Coefficients are expanded and compared with 0 structurally.  Where a
     coefficient mixes transcendental numbers (``cos(1/5)**2 + sin(1/5)**2 - 1``)
     the structural test can miss a zero; :class:`ZeroTest` then asks the rank
-    engine (:func:`nilpotent.core.spans.is_zero`: exact or certified) and counts
+    engine (:func:`nilpotent.core.decide.spans.is_zero`: exact or certified) and counts
     the zeros it could not prove, so that results can say they were not decided
     exactly.
 """
@@ -37,7 +37,7 @@ from typing import cast
 import symengine as se
 import sympy as sp
 
-from nilpotent.core.spans import is_zero, to_double
+from nilpotent.core.decide.spans import is_zero, to_double
 from nilpotent.errors import PointError
 
 Monomial = tuple[int, ...]
@@ -77,10 +77,10 @@ class ZeroTest:
     """Decide whether an exact coefficient is zero.
 
     Structural first (symengine's canonical form after expansion); where that
-    leaves a constant that is not a number, :func:`nilpotent.core.spans.is_zero`
+    leaves a constant that is not a number, :func:`nilpotent.core.decide.spans.is_zero`
     decides (exact for rational and algebraic values, a certified ball proves a
     nonzero); a constant that stays within a ball around 0 at
-    :data:`~nilpotent.core.spans.MAX_PRECISION_BITS` bits without an exact proof
+    :data:`~nilpotent.core.decide.spans.MAX_PRECISION_BITS` bits without an exact proof
     counts as 0 and as a numerical decision.  A float (a value computed in
     floating point) is zero below :attr:`float_tolerance` in absolute value.
     :attr:`numeric_decisions` counts the coefficients decided zero numerically.

@@ -1,6 +1,6 @@
 """A printer of sympy expressions as text of the expression grammar, linear in their size.
 
-Used by :func:`nilpotent.core.expressions.format_expression` for large
+Used by :func:`nilpotent.core.model.expressions.format_expression` for large
 expressions (the polynomials of exponential coordinates have thousands of
 terms), where sympy's ``StrPrinter`` sorts every sum and is far slower.
 """

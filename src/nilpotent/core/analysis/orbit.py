@@ -52,10 +52,11 @@ import symengine as se
 import sympy as sp
 from flint import arb, arb_mat, arb_series
 
-from nilpotent.core.brackets import Word, format_word, se_coordinates, to_symengine
-from nilpotent.core.evaluation import Evaluator, Inaccurate, NotEvaluable, ball, precision
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.decide.evaluation import Evaluator, Inaccurate, NotEvaluable, ball, precision
+from nilpotent.core.lie.brackets import Word, format_word, se_coordinates, to_symengine
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError
+from nilpotent.strict_json import json_object
 
 __all__ = ["ORBIT_TIME_BUDGET", "OrbitCertificate", "certify_by_orbit"]
 
@@ -133,7 +134,7 @@ class OrbitCertificate:
                 "statement": self.statement(),
             }
         )
-        return out
+        return json_object(out)
 
 
 def _fmt(t: Fraction) -> str:
@@ -408,8 +409,8 @@ def certify_by_orbit(
     OrbitCertificate or None
         A certificate that the Lie algebra has rank $n$ at ``point``.
     """
-    from nilpotent.core.filtration import _generic_growth_at
-    from nilpotent.core.word_values import Undefined, WordValues
+    from nilpotent.core.analysis.growth import generic_growth_at
+    from nilpotent.core.lie.word_values import Undefined, WordValues
 
     started = time.monotonic()
     coords = se_coordinates(sys)
@@ -442,7 +443,7 @@ def certify_by_orbit(
                     continue
                 mid = [sp.Rational(str(Fraction(*_mid_ratio(b)))) for b in box]
                 try:
-                    _, frame = _generic_growth_at(sys, mid)
+                    _, frame = generic_growth_at(sys, mid)
                 except (Undefined, Inaccurate, NotEvaluable, ZeroDivisionError):
                     continue
                 except ComputationLimitError:

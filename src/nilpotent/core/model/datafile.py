@@ -61,7 +61,7 @@ def _size_limit(path: Path, size: int) -> None:
     if size > MAX_FILE_BYTES:
         raise ComputationLimitError(
             f"{path}: {size:,} bytes, above the limit {MAX_FILE_BYTES:,} of a file read "
-            "(nilpotent.core.datafile.MAX_FILE_BYTES)"
+            "(nilpotent.core.model.datafile.MAX_FILE_BYTES)"
         )
 
 

@@ -22,8 +22,8 @@ from functools import cached_property
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.outline import Limits, Outline
+from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.outline import Limits, Outline
 from nilpotent.errors import ModelError
 
 Expr = sp.Expr
@@ -50,11 +50,11 @@ class ControlSystem:
     description:
         One line saying what the model is.
     limits:
-        Box limits on coordinates (:class:`~nilpotent.core.outline.Limits`;
+        Box limits on coordinates (:class:`~nilpotent.core.model.outline.Limits`;
         the ``[limits]`` table of model files).
     geometry:
         The robot's outline for collision checks
-        (:class:`~nilpotent.core.outline.Outline`), or ``None``.
+        (:class:`~nilpotent.core.model.outline.Outline`), or ``None``.
 
     Raises
     ------
@@ -163,10 +163,10 @@ class ControlSystem:
 
         Decimals (in the fields or the parameter values) are read as the exact
         rationals they denote (``0.7`` is ``7/10``,
-        :func:`nilpotent.core.spans.exact_decimals`), so that every computation
+        :func:`nilpotent.core.decide.spans.exact_decimals`), so that every computation
         on the fields is exact.
         """
-        from nilpotent.core.spans import exact_decimals
+        from nilpotent.core.model.expressions import exact_decimals
 
         subs = [(sp.Symbol(k), exact_decimals(v)) for k, v in self.parameters]
         return tuple(
@@ -197,7 +197,7 @@ class ControlSystem:
         """A point as a tuple of sympy numbers, from a sequence or a name→value mapping.
 
         Missing names are 0.  Numbers only (ints, fractions, floats, sympy
-        numbers); user text must go through :func:`nilpotent.core.points.parse_point`.
+        numbers); user text must go through :func:`nilpotent.core.model.points.parse_point`.
         """
         if values is None:
             return self.origin()

@@ -2,7 +2,7 @@
 
 $\\Delta^1 = \\mathrm{span}\\{X_i\\}$, $\\Delta^{s+1} = \\Delta^s + [\\Delta^1, \\Delta^s]$;
 $n_s(p) = \\dim \\Delta^s(p)$ is spanned by the values at $p$ of the bracket words
-of length $\\le s$ (of the Hall basis, :func:`nilpotent.core.brackets.hall_basis`).
+of length $\\le s$ (of the Hall basis, :func:`nilpotent.core.lie.brackets.hall_basis`).
 :func:`analyze` gives the growth vector, the weights, the step, an adapted frame
 made of Hall words, whether $p$ is regular and whether the system is
 bracket-generating there.  Bracket convention $[X,Y] = DY\\cdot X - DX\\cdot Y$.
@@ -14,9 +14,9 @@ How it is computed
    probability one, so near $q$ the words chosen up to length $s$ span
    $\\Delta^s$ as a module and $\\Delta^{s+1}(q)$ is spanned by them and the
    brackets $[X_i, Y]$ with $Y$ a word chosen at length $s$.  Words are
-   evaluated by :class:`~nilpotent.core.word_values.WordValues`: from their
+   evaluated by :class:`~nilpotent.core.lie.word_values.WordValues`: from their
    fields as polynomials in the coordinates and elementary atoms
-   (:mod:`nilpotent.core.polynomial_fields`; exact rationals where the atoms
+   (:mod:`nilpotent.core.lie.polynomial_fields`; exact rationals where the atoms
    are rational, certified arb balls elsewhere), or, for fields outside those
    atoms, from the symengine fields of their halves by forward-mode
    directional derivatives.
@@ -27,7 +27,7 @@ How it is computed
    word of that length, so $n_s(p)$ is exact also at singular points, where
    the span can stall for some lengths and grow later (Martinet at 0:
    growth $(2, 2, 3)$).
-3. Every decision is made by the one rank engine :mod:`nilpotent.core.spans`:
+3. Every decision is made by the one rank engine :mod:`nilpotent.core.decide.spans`:
    independence proved by ball arithmetic (scale-invariant: normalised Gram
    determinants), dependence proved by exact arithmetic; what cannot be
    proved is *undetermined* and reported (``Filtration.undetermined``), never
@@ -37,7 +37,6 @@ How it is computed
 
 from __future__ import annotations
 
-import random
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -45,42 +44,31 @@ from dataclasses import dataclass
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.brackets import (
+from nilpotent.core.analysis.growth import generic_growth_vector, normalise_point
+from nilpotent.core.analysis.orbit import ORBIT_TIME_BUDGET, OrbitCertificate, certify_by_orbit
+from nilpotent.core.decide.spans import START_PRECISION_BITS, Decision, Span
+from nilpotent.core.lie.brackets import (
     Word,
     format_word,
     hall_basis,
     word_length,
     word_values_at,
 )
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.hall_budget import (
+from nilpotent.core.lie.hall_budget import (
     HALL_WORD_BUDGET,
     budget_length,
     check_hall_budget,
     default_max_length,
     default_max_length_for_budget,
 )
-from nilpotent.core.orbit import ORBIT_TIME_BUDGET, OrbitCertificate, certify_by_orbit
-from nilpotent.core.spans import (
-    START_PRECISION_BITS,
-    Decision,
-    Span,
-    exact_decimals,
-    exact_value,
-)
-from nilpotent.core.system import ControlSystem
-from nilpotent.core.word_values import Undefined, WordValues
+from nilpotent.core.lie.word_values import Undefined, WordValues
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import (
     ComputationLimitError,
-    ModelError,
     PointError,
 )
 from nilpotent.progress import progress
-
-GENERIC_PERTURBATION = 0.25
-"""Half-width of the box around ``p`` in which the random points are drawn."""
-
-_SEED = 20240611
+from nilpotent.strict_json import json_object
 
 
 @dataclass(frozen=True)
@@ -130,12 +118,12 @@ class Filtration:
         Where the brackets span $\\mathbb{R}^n$ nearby but not at ``p``: a
         polynomial $g$ with $g(p) = 0$, $\\nabla g(p) \\ne 0$ whose zero set is
         invariant under every field, proving ``bracket_generating`` false
-        (:func:`nilpotent.core.singular.invariant_hypersurface`); else None.
+        (:func:`nilpotent.core.analysis.singular.invariant_hypersurface`); else None.
     certified_by:
         When the bracket search at ``p`` ended short of $n$ but the brackets
         were proved to span $\\mathbb{R}^n$ at a point of the orbit of ``p``
         (hence at ``p``, by Nagano's orbit theorem for analytic fields): the
-        :class:`~nilpotent.core.orbit.OrbitCertificate`; else None.
+        :class:`~nilpotent.core.analysis.orbit.OrbitCertificate`; else None.
     growth_vector_known_up_to:
         None when ``growth_vector`` is complete; else the bracket length up to
         which it is proved (it is then a prefix: the lengths at which the span
@@ -181,11 +169,11 @@ class Filtration:
         ``bracket_generating`` and ``regular`` are ``null`` when undetermined;
         ``undetermined`` is then an object saying what was tried (else ``null``).
         """
-        from nilpotent.core.expressions import format_expression
-        from nilpotent.core.points import format_point
+        from nilpotent.core.model.expressions import format_expression
+        from nilpotent.core.model.points import format_point
 
         sys = self.system
-        return {
+        return json_object({
             "schema": "nilpotent/analysis@1",
             "model": sys.name,
             "coordinates": list(sys.coordinate_names),
@@ -213,159 +201,14 @@ class Filtration:
                 else None
             ),
             "growth_vector_known_up_to": self.growth_vector_known_up_to,
-        }
-
-
-# --- values of words -------------------------------------------------------------
+        })
 
 
 ANALYSIS_TIME_BUDGET = 60.0
 """Seconds the bracket search at a point may take before its result is undetermined."""
 
 
-# --- generic growth vector ----------------------------------------------------
-
-
-def _random_points(point: Sequence[sp.Expr], count: int) -> list[list[sp.Expr]]:
-    """Pseudo-random rational points near ``point``: ``round(p) + δ`` with rational ``δ``.
-
-    An irrational ``p`` is first replaced by a 20-digit decimal (a random point
-    only needs to be near ``p``), so that the values of rational fields are
-    exact rationals.
-    """
-    rng = random.Random(_SEED)
-    den = 2**20
-    half = int(GENERIC_PERTURBATION * den)
-    out = []
-    for _ in range(count):
-        vals = []
-        for v in point:
-            q = exact_value(v)
-            centre = (
-                sp.Rational(int(q.p), int(q.q)) if q is not None else sp.Rational(str(sp.N(v, 20)))
-            )
-            vals.append(centre + sp.Rational(rng.randint(-half, half), den))
-        out.append(vals)
-    return out
-
-
-def _generic_growth_at(
-    sys: ControlSystem, values: Sequence[sp.Expr], frame: Sequence[Word] | None = None
-) -> tuple[tuple[int, ...], tuple[Word, ...]]:
-    """Growth vector at a (random, assumed regular) point, and the words that realise it.
-
-    With ``frame`` given, only those words are evaluated (a cheap confirmation at
-    a second point); else new words are the brackets ``[X_i, Y]`` of the chosen
-    generators with the words chosen at the previous length.
-    """
-    n, m = sys.n, sys.m
-    at = WordValues(sys, values, symbolic=False)
-    span = Span(probabilistic=True)
-    chosen: list[Word] = []
-
-    def add(w: Word) -> bool:
-        if span.add(at.vector(w)) is Decision.INDEPENDENT:
-            chosen.append(w)
-            return True
-        return False
-
-    growth: list[int] = []
-    if frame is not None:
-        by_length: dict[int, list[Word]] = {}
-        for w in frame:
-            by_length.setdefault(word_length(w), []).append(w)
-        for s in range(1, max(by_length, default=0) + 1):
-            for w in by_length.get(s, []):
-                add(w)
-            growth.append(span.rank)
-        return tuple(growth), tuple(chosen)
-    newest: list[Word] = [i for i in range(1, m + 1) if add(i)]
-    generators = list(newest)
-    growth.append(span.rank)
-    while span.rank < n:
-        candidates = []
-        for w in newest:
-            for g in generators:
-                # [X, X] = 0 and [Y, X] = -[X, Y]: each pair once
-                if g != w and (w, g) not in candidates:
-                    candidates.append((g, w))
-        newest = []
-        for w in candidates:
-            if add(w):
-                newest.append(w)
-                if span.rank == n:
-                    break
-        if not newest:
-            break
-        growth.append(span.rank)
-    return tuple(growth), tuple(chosen)
-
-
-def generic_growth_vector(
-    sys: ControlSystem, point: Sequence[sp.Expr] | None = None
-) -> tuple[int, ...]:
-    """The growth vector at random points near ``point`` (the origin by default).
-
-    A pseudo-random rational point (fixed seed) in the box of half-width
-    :data:`GENERIC_PERTURBATION` around ``point`` is regular with probability one;
-    there the words chosen at length $s$ span $\\Delta^s$ as a module, so only
-    the brackets $[X_i, Y]$ with the words $Y$ chosen at the previous length are
-    needed.  Decisions go through :class:`~nilpotent.core.spans.Span` (exact
-    for rational values, else certified balls; a Gram determinant that stays
-    within $2^{-3P/4}$ of 0 at a random point counts as 0, with probability one).
-    The growth of the same words is confirmed at a second random point and the
-    componentwise maximum returned (each is a lower bound of the generic
-    value); if the two differ, the second point is analysed in full.
-    """
-    p = _normalise_point(sys, point)
-    results: list[tuple[int, ...]] = []
-    frame: tuple[Word, ...] | None = None
-    for values in _random_points(p, 8):
-        try:
-            growth, words = _generic_growth_at(sys, values, frame)
-            if frame is not None and growth != results[0]:
-                growth, words = _generic_growth_at(sys, values)
-        except Undefined:
-            continue
-        results.append(growth)
-        frame = words
-        if len(results) == 2:
-            break
-    if not results:
-        raise PointError(
-            f"the fields of {sys.name!r} could not be evaluated at random points near "
-            f"({', '.join(str(v) for v in p)})"
-        )
-    length = max(len(g) for g in results)
-    padded = [g + (g[-1],) * (length - len(g)) for g in results]
-    return tuple(max(col) for col in zip(*padded, strict=True))
-
-
 # --- analysis at p ------------------------------------------------------------
-
-
-def _normalise_point(
-    sys: ControlSystem, point: Sequence[object] | Mapping[str, object] | None
-) -> tuple[sp.Expr, ...]:
-    """The point as exact sympy numbers (decimals read as the rationals they denote)."""
-    extra = set().union(*(as_expr(e).free_symbols for f in sys.specialized_fields for e in f))
-    extra -= set(sys.coordinates)
-    if extra:
-        raise ModelError(
-            f"the fields of {sys.name!r} contain symbols that are neither coordinates nor "
-            f"parameters: {', '.join(sorted(map(str, extra)))}"
-        )
-    if point is None:
-        return sys.origin()
-    if isinstance(point, Mapping):
-        point = sys.point(point)
-    if len(point) != sys.n:
-        raise PointError(f"a point of {sys.name!r} has {sys.n} coordinates, got {len(point)}")
-    values = tuple(exact_decimals(v) for v in point)
-    for name, v in zip(sys.coordinate_names, values, strict=True):
-        if not (v.is_number and v.is_real is not False and v.is_finite is not False):
-            raise PointError(f"coordinate {name} of the point must be a real number, got {v}")
-    return values
 
 
 def analyze(
@@ -420,7 +263,7 @@ def analyze(
     ('X1', 'X2', '[X2,[X1,X2]]')
     """
     started = time.monotonic()
-    p = _normalise_point(sys, point)
+    p = normalise_point(sys, point)
     n, m = sys.n, sys.m
     generic = generic_growth_vector(sys, p)
     final = generic[-1]
@@ -499,7 +342,7 @@ def analyze(
         left = max(time_budget - (time.monotonic() - started), 0.0)
         certificate = certify_by_orbit(sys, p, time_budget=min(max(left, 5.0), ORBIT_TIME_BUDGET))
     if bracket_generating is None and not unsure and certificate is None:
-        from nilpotent.core.singular import invariant_hypersurface
+        from nilpotent.core.analysis.singular import invariant_hypersurface
 
         invariant = invariant_hypersurface(sys, p, generic)
         if invariant is not None:
@@ -597,7 +440,7 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
     """One expression whose zero set is the singular locus near ``filtration``'s point.
 
     The locus is computed from the generic frames
-    (:func:`nilpotent.core.singular.singular_set`: the common zeros of the
+    (:func:`nilpotent.core.analysis.singular.singular_set`: the common zeros of the
     determinants of every adapted frame of Hall words with the generic
     weights); this returns its single equation (``1`` when the system is
     regular everywhere).  ``filtration`` (default ``analyze(sys)``) only
@@ -624,7 +467,7 @@ def singular_locus(sys: ControlSystem, filtration: Filtration | None = None) -> 
     >>> singular_locus(martinet, analyze(martinet, (0, 1, 0)))
     x2
     """
-    from nilpotent.core.singular import singular_set
+    from nilpotent.core.analysis.singular import singular_set
 
     f = filtration if filtration is not None else analyze(sys)
     return singular_set(sys, f.generic_growth_vector).equation

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import symengine as se
 import sympy as sp
 
-from nilpotent.core.brackets import (
+from nilpotent.core.lie.brackets import (
     Word,
     format_word,
     hall_basis,
@@ -38,8 +38,8 @@ from nilpotent.core.brackets import (
     word_field_symengine,
     word_length,
 )
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, NotBracketGeneratingError
 
 __all__ = [
@@ -247,7 +247,7 @@ def singular_set(sys: ControlSystem, generic: Sequence[int] | None = None) -> Si
     (x,)
     """
     if generic is None:
-        from nilpotent.core.filtration import generic_growth_vector
+        from nilpotent.core.analysis.growth import generic_growth_vector
 
         generic = generic_growth_vector(sys)
     if not generic or generic[-1] != sys.n:
@@ -280,7 +280,7 @@ def singular_set(sys: ControlSystem, generic: Sequence[int] | None = None) -> Si
                 f"the singular locus of {sys.name!r} is not simplified: the determinant of the "
                 f"frame {', '.join(format_word(w) for w in frame)} expands to {size:,} "
                 f"characters (limit SINGULAR_DETERMINANT_MAX_CHARS = "
-                f"{SINGULAR_DETERMINANT_MAX_CHARS:,} in nilpotent.core.singular); analyze "
+                f"{SINGULAR_DETERMINANT_MAX_CHARS:,} in nilpotent.core.analysis.singular); analyze "
                 "points instead (the regular/singular verdict at a point needs no determinant)"
             )
         det = trig_normal_form(to_sympy(sys, expanded), coords)
