@@ -16,7 +16,7 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-import nilpotent.cli.cmd_execute  # noqa: F401  (registers the command)
+import nilpotent.cli.cmd_execute
 import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
 from nilpotent.core.modelfile import system_from_dict
 from nilpotent.errors import ComputationLimitError, SingularPointError
@@ -87,14 +87,13 @@ def test_nested_budgets_never_extend_the_outer_one():
             assert tight.hard < outer.hard  # type: ignore[union-attr]
         with budget.time_budget(float("inf")) as unlimited:
             assert unlimited is outer
-    with pytest.raises(ValueError):
-        with budget.time_budget(0.0):
-            pass
+    with pytest.raises(ValueError), budget.time_budget(0.0):
+        pass
 
 
 def test_memory_budget_refuses_before_allocating():
     budget.check_memory(1e6, "a small array")
-    with pytest.raises(ComputationLimitError, match="memory limit.*huge samples.*--max-piece"):
+    with pytest.raises(ComputationLimitError, match=r"memory limit.*huge samples.*--max-piece"):
         budget.check_memory(1e12, "huge samples", "raise --max-piece")
 
 
@@ -211,7 +210,7 @@ def test_no_usable_sample_says_so():
     from nilpotent.planning.local_model import compiled_system
 
     # defined only on the plane y = 0: no random point near it is in the domain
-    with pytest.raises(SingularPointError, match="no point near .* outside the model's domain"):
+    with pytest.raises(SingularPointError, match=r"no point near .* outside the model's domain"):
         generic_growth(compiled_system(s), np.zeros(3))
 
 
