@@ -7,7 +7,7 @@ segment) and integrated with adaptive DOP853 at tight tolerances.  Several
 candidate controls from the same state are integrated as one batch.
 
 Every integration is bounded (:mod:`nilpotent.planning.budget`): at most
-:data:`MAX_STEPS` steps per trajectory, and no more steps than the time left
+:data:`MAX_STEPS` steps per segment of a trajectory, and no more steps than the time left
 in the budget allows at the cost per step measured so far; a trajectory cut by
 the budget raises :class:`~nilpotent.errors.ComputationLimitError` once the
 deadline has passed (before it, it is retried with the steps the new estimate
@@ -39,7 +39,8 @@ from nilpotent.simulation.trajectory import Trajectory, simulate, stationary
 #: Tolerances of the true-system integration (DOP853).
 RTOL = 1e-12
 ATOL = 1e-13
-#: Most steps of one trajectory (accepted and rejected); more: given up.
+#: Most steps of one trajectory per segment of its controls (accepted and rejected);
+#: more: given up.
 MAX_STEPS = 20_000
 #: First guess of the wall-clock cost of one step per trajectory, by engine (seconds),
 #: replaced by what is measured.
@@ -62,7 +63,7 @@ def _learn(engine: str, seconds: float, steps: float, batch: int) -> None:
 
 
 def _bounded_integrate(compiled, xs: np.ndarray, inputs: Signal, engine: str, what: str,
-                       hard: bool = False):
+                       hard: bool = False, most: int = MAX_STEPS):
     """:func:`integrate` within the budget; returns ``(final, ok)``.
 
     Raises
@@ -73,7 +74,7 @@ def _bounded_integrate(compiled, xs: np.ndarray, inputs: Signal, engine: str, wh
     batch = xs.shape[0]
     while True:
         budget.check(what, hard)
-        cap = _step_cap(engine, batch, hard)
+        cap = _step_cap(engine, batch, hard, most)
         t0 = time.perf_counter()
         sol = integrate(compiled, xs, inputs, engine=engine, rtol=RTOL, atol=ATOL,
                         max_steps=cap)
@@ -81,7 +82,7 @@ def _bounded_integrate(compiled, xs: np.ndarray, inputs: Signal, engine: str, wh
         steps = np.asarray(sol.steps, dtype=float) + np.asarray(sol.rejected, dtype=float)
         _learn(engine, spent, float(steps.sum()) / max(1, batch), batch)
         cut = np.asarray(sol.status) == int(Status.MAX_STEPS)
-        if cap >= MAX_STEPS or not cut.any():
+        if cap >= most or not cut.any():
             return np.array(sol.final), np.asarray(sol.ok)
         budget.check(what, hard)  # cut by the time left: retried while time remains
 
@@ -127,7 +128,7 @@ def simulate_candidates(
             inputs = Signal.stack([candidates[i] for i in group])
             final, ok = _bounded_integrate(
                 compiled, np.repeat(x[None, :], len(group), axis=0), inputs, name,
-                "integrating candidate controls of the true system", hard)
+                "integrating candidate controls of the true system", hard, MAX_STEPS * length)
             final[~ok] = np.nan
             out[group] = final
     return out
