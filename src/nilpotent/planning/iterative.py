@@ -411,7 +411,9 @@ def plan(
         A bracket-generating system (parameters substituted from its values).
     start, goal:
         Points in the model's coordinates (sympy numbers or floats; exact
-        values are kept exact for the symbolic approximation).
+        rational values are kept exact for the symbolic approximation, other
+        exact values such as ``pi/2`` are used as floats after an exact check
+        of regularity: :func:`~nilpotent.planning.local_model.symbolic_model`).
     tol:
         Stop when ``‖x_k − goal‖`` (Euclidean) is at most ``tol``.
     max_iterations:
