@@ -291,3 +291,26 @@ def test_execute_keeps_its_time_limit(run_cli):
     data = json.loads(out)
     if status == 2:
         assert data["error"]["kind"] == "computation-limit"
+
+
+def test_indexed_disc_checks_agree_with_all_pairs():
+    """The STRtree clearance and collision test equal the dense all-pairs computation."""
+    import shapely
+
+    from nilpotent.planning.world import World
+
+    rng = np.random.default_rng(0)
+    discs = tuple(((float(x), float(y)), float(r)) for x, y, r in zip(
+        rng.uniform(-10, 10, 300), rng.uniform(-10, 10, 300), rng.uniform(0.01, 0.5, 300),
+        strict=True))
+    w = World("t", ((-12.0, 12.0), (-12.0, 12.0)), (((0, 0), (1, 0), (1, 1)),), discs)
+    g = np.array(shapely.points(rng.uniform(-11, 11, (50, 3, 2))))
+    g[0, 0] = shapely.LineString([(0, 0), (3, 3)])
+    radii = rng.uniform(0, 0.3, (50, 3))
+    centres = shapely.points([c for c, _ in discs])
+    r = np.array([r for _, r in discs])
+    dense = np.minimum(shapely.distance(g, w._blocked),
+                       (shapely.distance(g[..., None], centres) - r).min(axis=-1)) - radii
+    assert np.allclose(w.clearance(g, radii), dense, rtol=0, atol=1e-12)
+    for margin in (0.0, 0.1):
+        assert np.array_equal(w.collides(g, radii, margin), dense <= margin)

@@ -103,14 +103,14 @@ class World:
 
     def _disc_clearance(self, flat: np.ndarray) -> np.ndarray:
         """``min_j dist(g, c_j) − r_j`` for each geometry of ``flat`` (1-D), exactly: the
-        nearest centre bounds it, and only centres within that bound plus the spread of
-        the radii can do better (:class:`shapely.STRtree` queries)."""
+        nearest centre bounds it, and only centres within that bound plus the largest
+        radius can do better (:class:`shapely.STRtree` queries)."""
         radii = self._radii
         (gi, ci), dist = self._tree.query_nearest(flat, return_distance=True, all_matches=False)
         bound = np.full(flat.size, np.inf)
         np.minimum.at(bound, gi, dist - radii[ci])
-        spread = float(radii.max() - radii.min())
-        gi, ci = self._tree.query(flat, predicate="dwithin", distance=bound + radii.max() + spread)
+        # a centre j beats the bound only if dist_j < bound + r_j <= bound + max r
+        gi, ci = self._tree.query(flat, predicate="dwithin", distance=bound + radii.max())
         out = bound.copy()
         if gi.size:
             np.minimum.at(out, gi, shapely.distance(flat[gi], self._centres[ci]) - radii[ci])
@@ -149,11 +149,15 @@ class World:
                 geoms[~flat], self._blocked, reach[~flat]  # pyright: ignore[reportArgumentType]
             )
         if self._centres is not None and geoms.size:
-            flat, far = geoms.ravel(), reach.ravel()
-            radii = self._radii
-            gi, ci = self._tree.query(flat, predicate="dwithin", distance=far + radii.max())
+            flat, far = geoms.ravel(), np.asarray(reach, dtype=float).ravel()
+            disc_r: np.ndarray = self._radii
+            gi, ci = self._tree.query(flat, predicate="dwithin", distance=far + disc_r.max())
             if gi.size:
-                near = shapely.dwithin(flat[gi], self._centres[ci], far[gi] + radii[ci])
+                # shapely's stubs take a scalar distance; dwithin is vectorised over it
+                near = shapely.dwithin(  # pyright: ignore[reportCallIssue]
+                    flat[gi], self._centres[ci],
+                    far[gi] + disc_r[ci],  # pyright: ignore[reportArgumentType]
+                )
                 hit = np.zeros(flat.size, dtype=bool)
                 hit[gi[near]] = True
                 out |= hit.reshape(geoms.shape)
