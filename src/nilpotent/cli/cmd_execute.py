@@ -40,7 +40,8 @@ from nilpotent.errors import OptionError
 MismatchOpt = Annotated[
     str | None,
     typer.Option("--mismatch", metavar="P=F,...",
-                 help="True parameters off by fractions: r=0.05,l=-0.05 means r·1.05, l·0.95."),
+                 help="True parameters off by fractions: r=0.05,l=-0.05 means r·1.05, l·0.95 "
+                      "(each between -0.5 and 1)."),
 ]
 NoiseOpt = Annotated[
     float,
