@@ -34,6 +34,7 @@ from nilpotent.cli.plan_options import (
     TimeLimitOpt,
     ToOpt,
     WorldOpt,
+    command_budget,
     plan_from_options,
 )
 from nilpotent.errors import OptionError
@@ -41,7 +42,8 @@ from nilpotent.errors import OptionError
 MismatchOpt = Annotated[
     str | None,
     typer.Option("--mismatch", metavar="P=F,...",
-                 help="True parameters off by fractions: r=0.05,l=-0.05 means r·1.05, l·0.95."),
+                 help="True parameters off by fractions: r=0.05,l=-0.05 means r·1.05, l·0.95 "
+                      "(each between -0.5 and 1)."),
 ]
 NoiseOpt = Annotated[
     float,
@@ -55,6 +57,10 @@ ExecTolOpt = Annotated[
                  help="Correct until the measured distance to the goal is at most T.",
                  parser=bounded_float("--tol", 0.0, open_low=True)),
 ]
+#: Exit status of an execution that ran but did not succeed (goal not reached within --tol,
+#: or a violation by the true motion); documented in docs/planning.md.
+EXIT_NOT_REACHED = 3
+
 CorrOpt = Annotated[
     int,
     typer.Option("--max-corrections", metavar="N",
@@ -102,7 +108,10 @@ def execute_command(
     measured state, then corrections toward the goal until the measured error
     is at most --tol.  Reports the closed-loop and the open-loop final errors
     and every violation of limits, obstacles and singular margin by the true
-    motion (schema nilpotent/execution@1).
+    motion (schema nilpotent/execution@1).  --time-limit bounds the whole
+    command (planning and execution).  Exit status 0: the goal was reached
+    without violations ("success": true); 3: the execution ran but did not
+    succeed (the report is printed all the same); 2: an error.
     """
     from nilpotent.planning.execute import execute_plan
 
@@ -110,8 +119,6 @@ def execute_command(
         raise OptionError(f"--noise must be >= 0, got {noise}")
     if not (math.isfinite(tol) and tol > 0):
         raise OptionError(f"--tol must be a positive number, got {tol}")
-    if max_corrections < 0:
-        raise OptionError(f"--max-corrections must be >= 0, got {max_corrections}")
     fractions = parse_mismatch(mismatch)
     system = load_model_option(model, param)
     from nilpotent.planning.execute import perturbed_system
@@ -119,14 +126,20 @@ def execute_command(
     perturbed_system(system, fractions)  # refuse bad names before planning
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
-    with work(f"plan {system.name}"):
-        glob = plan_from_options(system, start, goal, min(1e-8, tol), world, limit,
-                                 singular_margin, time_limit, seed, max_piece,
-                                 clearance=clearance)
-    with work(f"execute on the perturbed {system.name}"):
-        result = execute_plan(glob, fractions, noise, seed, tol, max_corrections, time_limit)
+    if not (math.isfinite(time_limit) and time_limit > 0):
+        raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
+    with command_budget(time_limit):  # one limit for planning and execution together
+        with work(f"plan {system.name}"):
+            glob = plan_from_options(system, start, goal, min(1e-8, tol), world, limit,
+                                     singular_margin, time_limit, seed, max_piece,
+                                     clearance=clearance)
+        with work(f"execute on the perturbed {system.name}"):
+            result = execute_plan(glob, fractions, noise, seed, tol, max_corrections,
+                                  time_limit)
     if json_out:
         emit_json(result.to_json())
+        if not result.reached:
+            raise typer.Exit(EXIT_NOT_REACHED)
         return
     console = stdout_console()
     c, o = result.closed_loop, result.open_loop
@@ -138,6 +151,9 @@ def execute_command(
     console.print(f"open loop:   error {o.error:.3e}; violations: "
                   f"{'; '.join(result.open_loop_violations) or 'none'}")
     verdict = "reached" if result.reached else "NOT reached"
-    console.print(f"goal {verdict} within {tol:g}")
+    stop = " (corrections stopped by the time limit)" if result.stopped_by_time_limit else ""
+    console.print(f"goal {verdict} within {tol:g}{stop}")
+    if not result.reached:
+        raise typer.Exit(EXIT_NOT_REACHED)
 
 

@@ -41,6 +41,7 @@ from nilpotent.cli.plan_options import (
     TimeLimitOpt,
     ToOpt,
     WorldOpt,
+    command_budget,
     plan_from_options,
 )
 from nilpotent.errors import OptionError
@@ -64,7 +65,8 @@ AnchorOpt = Annotated[
 MaxItOpt = Annotated[
     int,
     typer.Option("--max-iterations", metavar="N",
-                 help=f"Most nilpotent steps (1 to {MAX_ITERATIONS}).",
+                 help=f"Most nilpotent steps, and most Newton steps of the final "
+                      f"refinement (1 to {MAX_ITERATIONS}).",
                  parser=bounded_int("--max-iterations", 1, MAX_ITERATIONS)),
 ]
 
@@ -178,7 +180,7 @@ def plan_command(
     system = load_model_option(model, param)
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
-    with work(f"plan {system.name}"):
+    with work(f"plan {system.name}"), command_budget(time_limit):
         result = plan_from_options(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,

@@ -52,7 +52,8 @@ MarginOpt = Annotated[
 TimeLimitOpt = Annotated[
     float,
     typer.Option("--time-limit", metavar="S",
-                 help="Give up (exit 2, nothing written) when no plan is found within S seconds.",
+                 help="Give up (exit 2, kind computation-limit, nothing written) when no "
+                      "plan is found within S seconds, counted from the start of the command.",
                  parser=bounded_float("--time-limit", 0.0, open_low=True)),
 ]
 
@@ -107,6 +108,20 @@ def parse_limit_options(texts: list[str] | None, system) -> dict[str, tuple[floa
             raise OptionError(f"--limit {name} given twice")
         out[name] = (lo, hi)
     return out
+
+
+def command_budget(time_limit: float):
+    """The time budget (:func:`nilpotent.planning.budget.time_budget`) of a command that
+    takes ``--time-limit``: counted from the start of the process when the process is
+    this command line (the console script or ``python -m nilpotent``: start-up is part of
+    the wait), else (in-process calls) from now."""
+    import sys
+
+    from nilpotent.planning.budget import process_age, time_budget
+
+    main_run = getattr(sys.modules.get("__main__"), "run", None)
+    entry = getattr(main_run, "__module__", None) == "nilpotent.cli"  # no import: no cycle
+    return time_budget(time_limit, already=process_age() if entry else 0.0)
 
 
 def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,

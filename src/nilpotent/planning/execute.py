@@ -18,6 +18,12 @@ The motion of the true robot (its own outline, with the true parameters) is
 checked at dense samples; every violation (limits, contact, singular margin)
 is reported.  The open-loop result — the plan's controls applied unchanged to
 the true robot — is computed too, for comparison.
+
+Everything runs within one time limit (:mod:`nilpotent.planning.budget`): when it
+runs out while pieces of the plan remain, :class:`~nilpotent.errors.ComputationLimitError`;
+when it runs out during the corrections, they stop there and the result says so
+(``stopped_by_time_limit``).  Mismatch fractions are within
+:data:`MISMATCH_RANGE` (a true robot of half to twice the model's sizes).
 """
 
 from __future__ import annotations
@@ -30,7 +36,8 @@ from typing import Any
 import numpy as np
 
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.errors import OptionError, PlanningError
+from nilpotent.errors import ComputationLimitError, OptionError, PlanningError
+from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.global_planner import (
     MID_TOL,
@@ -46,6 +53,10 @@ __all__ = ["Execution", "execute_plan", "perturbed_system"]
 
 #: Samples per segment when the true robot's motion is checked.
 SAMPLES = 100
+#: Fractions ``--mismatch`` accepts: the true parameter is ``p (1 + f)``, half to twice ``p``.
+MISMATCH_RANGE = (-0.5, 1.0)
+#: Most corrections (``--max-corrections``).
+MAX_CORRECTIONS = 1000
 
 
 def perturbed_system(system: ControlSystem, mismatch: Mapping[str, float]) -> ControlSystem:
@@ -54,7 +65,7 @@ def perturbed_system(system: ControlSystem, mismatch: Mapping[str, float]) -> Co
     Raises
     ------
     OptionError
-        An unknown parameter, or a fraction ≤ −1 (a non-positive length).
+        An unknown parameter, or a fraction outside :data:`MISMATCH_RANGE`.
     """
     values = system.parameter_values
     new = {}
@@ -63,8 +74,11 @@ def perturbed_system(system: ControlSystem, mismatch: Mapping[str, float]) -> Co
             known = ", ".join(values) or "none"
             raise OptionError(f"--mismatch: model {system.name} has no parameter {name!r} "
                               f"(parameters: {known})")
-        if not (math.isfinite(frac) and frac > -1):
-            raise OptionError(f"--mismatch {name}={frac}: the fraction must be > -1")
+        lo, hi = MISMATCH_RANGE
+        if not (math.isfinite(frac) and lo <= frac <= hi):
+            raise OptionError(
+                f"--mismatch {name}={frac:g}: the fraction must be between {lo:g} and {hi:g} "
+                f"(the true {name} between {1 + lo:g} and {1 + hi:g} times the model's)")
         new[name] = float(values[name]) * (1.0 + frac)
     return system.with_parameters(new) if new else system
 
@@ -88,6 +102,8 @@ class Execution:
         One sentence per kind of violation of the true motion (empty: none).
     mismatch, noise, seed, tol:
         The execution's settings.
+    stopped_by_time_limit:
+        The corrections stopped because the time limit ran out.
     """
 
     plan: GlobalPlan
@@ -102,6 +118,7 @@ class Execution:
     seed: int
     tol: float
     segments: tuple[Segment, ...] = ()
+    stopped_by_time_limit: bool = False
 
     @property
     def reached(self) -> bool:
@@ -127,6 +144,7 @@ class Execution:
             "seed": self.seed,
             "tol": self.tol,
             "success": self.reached,
+            "stopped_by_time_limit": self.stopped_by_time_limit,
             "closed_loop": {**block(self.closed_loop, self.violations),
                             "measured_error": self.measured_error, "replans": self.replans,
                             "segments": [s.to_dict() for s in self.segments]},
@@ -172,17 +190,37 @@ def execute_plan(
     tol:
         The measured error at which the corrections stop.
     max_corrections:
-        Most re-plans toward the goal after the last piece.
+        Most re-plans toward the goal after the last piece (0 to :data:`MAX_CORRECTIONS`).
     time_limit:
-        Seconds for each fallback to the global planner.
+        Seconds for the whole execution (within an enclosing budget, the earlier end).
 
     Raises
     ------
     OptionError
-        Bad mismatch or noise.
+        Bad mismatch, noise or number of corrections.
     PlanningError
         A re-plan from a measured state fails (model steering and global planner).
+    ComputationLimitError
+        The time limit ran out before every piece of the plan was executed.
     """
+    if not (0 <= max_corrections <= MAX_CORRECTIONS):
+        raise OptionError(
+            f"--max-corrections must be between 0 and {MAX_CORRECTIONS}, got {max_corrections}")
+    if not time_limit > 0:
+        raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
+    with budget.time_budget(time_limit):
+        return _execute(glob, mismatch, noise, seed, tol, max_corrections, time_limit)
+
+
+def _execute(
+    glob: GlobalPlan,
+    mismatch: Mapping[str, float] | None,
+    noise: float,
+    seed: int,
+    tol: float,
+    max_corrections: int,
+    time_limit: float,
+) -> Execution:
     if not (math.isfinite(noise) and noise >= 0):
         raise OptionError(f"--noise must be >= 0, got {noise}")
     if not (math.isfinite(tol) and tol > 0):
@@ -227,7 +265,7 @@ def execute_plan(
         nonlocal x, x_meas, t_offset
         if not segs:
             return
-        t, q = simulate_path(true, x, segs, SAMPLES)
+        t, q = simulate_path(true, x, segs, SAMPLES, hard=True)
         states.append(q[1:])
         times.append(t[1:] + t_offset)
         t_offset += float(t[-1])
@@ -240,13 +278,18 @@ def execute_plan(
         target = np.array(piece.target)
         apply(controls(x_meas, target, glob.plan.tol if final else MID_TOL))
         replans += 1
+    stopped = False
     for _ in range(max_corrections):
         if float(np.linalg.norm(x_meas - goal)) <= tol:
             break
-        apply(controls(x_meas, goal, min(glob.plan.tol, tol / 10)))
+        try:
+            apply(controls(x_meas, goal, min(glob.plan.tol, tol / 10)))
+        except ComputationLimitError:
+            stopped = True  # the robot stays where it is: the result says so
+            break
         replans += 1
     closed = verify_states(actual, np.concatenate(times), np.vstack(states), goal)
-    t_open, q_open = simulate_path(true, x0, list(glob.plan.segments), SAMPLES)
+    t_open, q_open = simulate_path(true, x0, list(glob.plan.segments), SAMPLES, hard=True)
     opened = verify_states(actual, t_open, q_open, goal)
     return Execution(
         plan=glob, closed_loop=closed, open_loop=opened,
@@ -254,4 +297,5 @@ def execute_plan(
         violations=_violations(actual, closed.states),
         open_loop_violations=_violations(actual, q_open),
         mismatch=mismatch, noise=noise, seed=seed, tol=tol, segments=tuple(applied),
+        stopped_by_time_limit=stopped,
     )

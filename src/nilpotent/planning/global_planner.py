@@ -54,6 +54,7 @@ from nilpotent.errors import (
     SingularPointError,
 )
 from nilpotent.numeric.types import State
+from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
 from nilpotent.planning.simulation import simulate_path
@@ -80,9 +81,9 @@ MAX_PIECE = 1.0
 SIMPLIFY_SECONDS = 0.5
 #: Pieces are not halved below this length: then planning fails.
 MIN_PIECE = 1e-3
-#: Most pieces a global path is cut into (each is steered on its own, in 0.1-1 s).
+#: Most pieces a global path is cut into (each steered on its own, in 0.1-1 s; memory).
 MAX_PIECES = 10_000
-#: Samples per segment when a piece's motion is checked, and when the whole plan is verified.
+#: Samples per segment when a piece's motion is checked / the whole plan is verified.
 CHECK_POINTS = 40
 VERIFY_POINTS = 100
 #: Samples per segment of the second, denser check of a piece whose samples are all
@@ -91,6 +92,8 @@ DENSE_CHECK_POINTS = 200
 #: The direct attempt (one nilpotent plan, the old behaviour) is made for goals this close
 #: (configuration-space Euclidean distance).
 DIRECT_RADIUS = 2.0
+#: Configurations checked at once along a straight chord (memory).
+CHORD_CHUNK = 20_000
 
 
 @dataclass(frozen=True)
@@ -383,9 +386,15 @@ def _densify(points: Sequence[np.ndarray], max_piece: float) -> list[np.ndarray]
 def _chord_valid(
     valid: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray, step: float = 0.01
 ) -> bool:
+    """Every configuration ``step`` apart on the chord ``a → b`` valid (checked in chunks of
+    :data:`CHORD_CHUNK`, within the time budget; stops at the first invalid one)."""
     k = max(2, math.ceil(float(np.linalg.norm(b - a)) / step) + 1)
-    t = np.linspace(0.0, 1.0, k)[:, None]
-    return bool(np.all(valid(a + t * (b - a))))
+    for lo in range(0, k, CHORD_CHUNK):
+        budget.check("checking a straight chord of the configuration space")
+        t = (np.arange(lo, min(k, lo + CHORD_CHUNK), dtype=float) / (k - 1))[:, None]
+        if not np.all(valid(a + t * (b - a))):
+            return False
+    return True
 
 
 def _roomy(
@@ -506,16 +515,49 @@ def plan_global(
     Raises
     ------
     PlanningError
-        Start or goal not admissible, no path within the time limit, a piece
+        Start or goal not admissible, no path, a piece
         that cannot be steered inside the free space even when short, or a
         final verification that fails (never returns an unverified plan).
+    ComputationLimitError
+        The time limit ran out before a plan was found and verified (every
+        step is bounded by it: :mod:`nilpotent.planning.budget`), or the plan
+        would need more than :data:`MAX_PIECES` pieces.
     """
-    t0 = time.perf_counter()
-    deadline = t0 + time_limit
-    if not (tol > 0 and math.isfinite(tol)):
-        raise PlanningError(f"tol must be a positive number, got {tol}")
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise PlanningError(f"time limit must be a positive number of seconds, got {time_limit}")
+    with budget.time_budget(time_limit):
+        return _plan_global(
+            sys, start, goal, tol, world=world, limits=limits,
+            singular_margin=singular_margin, time_limit=time_limit, seed=seed,
+            max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
+            max_iterations=max_iterations, clearance=clearance,
+            path_clearance=path_clearance, hold_shape=hold_shape,
+        )
+
+
+def _plan_global(
+    sys: ControlSystem,
+    start: Sequence[object] | State,
+    goal: Sequence[object] | State,
+    tol: float,
+    *,
+    world: World | None,
+    limits: Limits | None,
+    singular_margin: float,
+    time_limit: float,
+    seed: int | None,
+    max_piece: float,
+    engine: str,
+    direct: bool,
+    anchor: str,
+    max_iterations: int,
+    clearance: float,
+    path_clearance: float,
+    hold_shape: bool,
+) -> GlobalPlan:
+    t0 = time.perf_counter()
+    if not (tol > 0 and math.isfinite(tol)):
+        raise PlanningError(f"tol must be a positive number, got {tol}")
     if not (max_piece > 0 and math.isfinite(max_piece)):
         raise PlanningError(f"max_piece must be > 0, got {max_piece}")
     options: dict[str, Any] = {"engine": engine, "anchor": anchor,
@@ -528,6 +570,14 @@ def plan_global(
         why = checker.why_invalid(q)
         if why:
             raise PlanningError(f"the {what} is not admissible: {why}")
+    distance = float(np.linalg.norm(xg - x0))
+    if distance / max_piece > MAX_PIECES:
+        # the path is at least as long as the chord: refused before anything is allocated
+        raise ComputationLimitError(
+            f"the goal is {distance:.3g} away: at least {math.ceil(distance / max_piece):,} "
+            f"pieces of --max-piece {max_piece:g}, above the limit of {MAX_PIECES:,} pieces; "
+            "raise --max-piece or plan to a nearer goal"
+        )
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
@@ -578,15 +628,24 @@ def plan_global(
         held = shape_indices(checker) if hold_shape else ()
         if held:
             # first with the shape held (body pose only), then in the whole space
-            budget = max(0.1, 0.25 * (deadline - time.perf_counter()))
+            budget.check("looking for a path with OMPL")
+            seconds = max(0.1, 0.25 * budget.seconds_left())
             try:
-                path = shape_held_path(checker, x0, xg, budget, seed, path_valid, held)
+                path = shape_held_path(checker, x0, xg, seconds, seed, path_valid, held)
             except PlanningError:
                 path = None
         if path is None:
-            budget = max(0.1, 0.5 * (deadline - time.perf_counter()))
-            path = ompl_path(checker, x0, xg, budget, seed, valid=path_valid)
+            budget.check("looking for a path with OMPL")
+            seconds = max(0.1, 0.5 * budget.seconds_left())
+            path = ompl_path(checker, x0, xg, seconds, seed, valid=path_valid)
         planner_s = time.perf_counter() - t_ompl
+    pieces_needed = sum(math.ceil(float(np.linalg.norm(b - a)) / max_piece)
+                        for a, b in itertools.pairwise(path))
+    if pieces_needed > MAX_PIECES:
+        raise ComputationLimitError(
+            f"the path found needs {pieces_needed:,} pieces of --max-piece {max_piece:g}, above "
+            f"the limit of {MAX_PIECES:,}; raise --max-piece or plan to a nearer goal"
+        )
     waypoints = _densify(path, max_piece)
     # 3. steer piece by piece, halving pieces whose motion is not admissible
     targets: deque[tuple[np.ndarray, int]] = deque((w, 0) for w in waypoints[1:])
@@ -597,11 +656,7 @@ def plan_global(
     pieces: list[Piece] = []
     last: Plan | None = None
     while targets:
-        if time.perf_counter() > deadline:
-            raise PlanningError(
-                f"no plan within the time limit of {time_limit:g} s ({len(pieces)} of about "
-                f"{len(pieces) + len(targets)} pieces steered); raise --time-limit"
-            )
+        budget.check(f"steering piece {len(pieces) + 1} of about {len(pieces) + len(targets)}")
         w, halvings = targets[0]
         final = len(targets) == 1
         length = float(np.linalg.norm(w - prev))

@@ -38,6 +38,7 @@ import numpy as np
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NilpotentError, PlanningError, SingularPointError
 from nilpotent.numeric.types import State
+from nilpotent.planning import budget
 from nilpotent.planning.controls import (
     Segment,
     coefficients,
@@ -239,6 +240,7 @@ def _candidates(
     """
     tri = model.nilpotent
     if tri.quasi_norm(y_from) <= 1e-15:
+        budget.check("steering the nilpotent approximation")
         try:
             steering = steer_nilpotent(tri, np.zeros_like(y_to), y_to, method=method)
         except NilpotentError:
@@ -248,6 +250,7 @@ def _candidates(
         return
     for s in DAMPING:
         target = y_to if s == 1.0 else y_to + tri.dilate(y_from - y_to, 1.0 - s)
+        budget.check("steering the nilpotent approximation")
         try:
             steering = steer_nilpotent(tri, y_from, target, method=method)
         except NilpotentError:
@@ -291,6 +294,7 @@ def _iterate(
     segments: list[Segment] = []
     history: list[Iteration] = []
     while error > max(tol, handover) and len(history) < max_iterations:
+        budget.check(f"nilpotent step {len(history) + 1}")
         t_it = time.perf_counter()
         try:
             model = model_at(x)
@@ -345,8 +349,11 @@ def _refine(
     xg: np.ndarray,
     tol: float,
     engine: str,
+    max_steps: int = REFINE_STEPS,
 ) -> tuple[list[Segment], np.ndarray, float, list[Iteration]]:
     """Shooting refinement: Newton on the true endpoint map over the last step's coefficients.
+
+    At most ``max_steps`` Newton steps (and :data:`REFINE_STEPS`).
 
     The coefficients of the last (at most two) segments are corrected by
     minimum-norm Gauss–Newton steps, ``θ ← θ − α J⁺ (x(θ) − goal)``, with the
@@ -364,9 +371,10 @@ def _refine(
     end = simulate_candidates(system, x_before, [tail], engine)[0]
     error = float(np.linalg.norm(end - xg))
     history: list[Iteration] = []
-    for _ in range(REFINE_STEPS):
+    for k in range(min(REFINE_STEPS, max_steps)):
         if error <= tol:
             break
+        budget.check(f"Newton step {k + 1} of the shooting refinement")
         t_it = time.perf_counter()
         h = FD_STEP * max(1.0, float(np.max(np.abs(theta))))
         probes = [from_coefficients(theta + h * e, tail, harmonics, m) for e in np.eye(theta.size)]
@@ -405,6 +413,7 @@ def plan(
     engine: str = "auto",
     refine: bool = True,
     handover: float | None = None,
+    time_limit: float = math.inf,
 ) -> Plan:
     """Steer ``sys`` from ``start`` to ``goal`` by iterated nilpotent steering.
 
@@ -414,11 +423,13 @@ def plan(
         A bracket-generating system (parameters substituted from its values).
     start, goal:
         Points in the model's coordinates (sympy numbers or floats; exact
-        values are kept exact for the symbolic approximation).
+        rational values are kept exact for the symbolic approximation, other
+        exact values such as ``pi/2`` are used as floats after an exact check
+        of regularity: :func:`~nilpotent.planning.local_model.symbolic_model`).
     tol:
         Stop when ``‖x_k − goal‖`` (Euclidean) is at most ``tol``.
     max_iterations:
-        Largest number of nilpotent steps.
+        Largest number of nilpotent steps (and of Newton steps of the refinement).
     anchor:
         Where the approximations are taken:
 
@@ -465,6 +476,8 @@ def plan(
         The start, the goal or an iterate is a singular point.
     PlanningError
         No progress, or the tolerance not met within ``max_iterations``.
+    ComputationLimitError
+        The time limit ran out (every step, the integrations included, is bounded by it).
 
     Examples
     --------
@@ -473,6 +486,31 @@ def plan(
     >>> p.error <= 1e-8
     True
     """
+    if not time_limit > 0:
+        raise PlanningError(f"time limit must be a positive number of seconds, got {time_limit}")
+    with budget.time_budget(time_limit):
+        return _plan(sys, start, goal, tol, max_iterations=max_iterations, anchor=anchor,
+                     builder=builder, method=method, raise_on_failure=raise_on_failure,
+                     trajectory_points=trajectory_points, engine=engine, refine=refine,
+                     handover=handover)
+
+
+def _plan(
+    sys: ControlSystem,
+    start: Sequence[object] | State,
+    goal: Sequence[object] | State,
+    tol: float,
+    *,
+    max_iterations: int,
+    anchor: str,
+    builder: str,
+    method: str,
+    raise_on_failure: bool,
+    trajectory_points: int,
+    engine: str,
+    refine: bool,
+    handover: float | None,
+) -> Plan:
     t_start = time.perf_counter()
     if anchor != "auto" and anchor not in ANCHORS:
         raise PlanningError(f"unknown anchor {anchor!r} (choose from auto, {', '.join(ANCHORS)})")
@@ -505,6 +543,7 @@ def plan(
     elif handover > 0 and not refine:
         raise PlanningError("handover > 0 hands the end over to the refinement: needs refine=True")
 
+    budget.check("building the local nilpotent model")
     if anchor == "start":
         fixed = build(system, start)
         back, _, _, history, failure = _iterate(
@@ -512,7 +551,7 @@ def plan(
             method, engine, handover, guess,
         )
         segments = list(reverse_segments(back or (guess if refine else [])))
-        x = simulate_candidates(system, x0, [segments], engine)[0]
+        x = simulate_candidates(system, x0, [segments], engine, hard=True)[0]
         error = float(np.linalg.norm(x - xg))
         if error <= tol:
             failure = ""
@@ -540,7 +579,8 @@ def plan(
 
     if refine and error > tol and segments:
         before = error
-        refined, x_ref, err_ref, more = _refine(system, x0, segments, xg, tol, engine)
+        refined, x_ref, err_ref, more = _refine(system, x0, segments, xg, tol, engine,
+                                                max_iterations)
         if more:  # keep the refinement only if it improved anything
             segments, x, error = refined, x_ref, err_ref
             history.extend(more)
@@ -552,7 +592,7 @@ def plan(
             failure = (
                 f"{failure}; the shooting refinement then went from {before:.3g} to {error:.3g}"
             )
-    trajectory = simulate_plan(system, x0, segments, trajectory_points, engine)
+    trajectory = simulate_plan(system, x0, segments, trajectory_points, engine, hard=True)
     result = Plan(
         system=system,
         start=tuple(float(v) for v in x0),

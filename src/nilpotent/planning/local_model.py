@@ -112,14 +112,49 @@ def compiled_system(system: ControlSystem) -> CompiledSystem:
     return compile_system(system)
 
 
+#: Random points of :func:`generic_growth`, their spread around the point, and how many
+#: times a point where the fields are not defined is redrawn (each time twice closer).
+GENERIC_SAMPLES = 3
+GENERIC_SPREAD = 0.1
+GENERIC_REDRAWS = 12
+
+
 def generic_growth(compiled: CompiledSystem, p: np.ndarray, seed: int = 0) -> tuple[int, int]:
-    """The largest ``(n_1, n_2)`` at three random points within 0.1 of ``p`` (generic values)."""
+    """The largest ``(n_1, n_2)`` at :data:`GENERIC_SAMPLES` random points near ``p``.
+
+    The points are drawn within about :data:`GENERIC_SPREAD` of ``p``; one where the
+    fields are not defined (outside the model's domain, e.g. a chart ``|v| < 1``) is
+    discarded and redrawn twice closer, up to :data:`GENERIC_REDRAWS` times.
+
+    Raises
+    ------
+    SingularPointError
+        No drawn point near ``p`` is in the domain (``p`` is on its edge).
+    """
     rng = np.random.default_rng(seed)
     best = (0, 0)
-    for _ in range(3):
-        q = p + 0.1 * rng.standard_normal(p.shape)
-        g = numeric_growth(compiled, q)
-        best = max(best, g)
+    usable = 0
+    closest = GENERIC_SPREAD
+    for _ in range(GENERIC_SAMPLES):
+        spread = GENERIC_SPREAD
+        for _ in range(GENERIC_REDRAWS):
+            q = p + spread * rng.standard_normal(p.shape)
+            try:
+                g = numeric_growth(compiled, q)
+            except SingularPointError:  # not defined there: redraw closer
+                closest = min(closest, spread)
+                spread /= 2
+                continue
+            best = max(best, g)
+            usable += 1
+            break
+    if not usable:
+        raise SingularPointError(
+            f"no point near {_fmt(p)} where the fields of {compiled.name} are defined: "
+            f"{GENERIC_SAMPLES * GENERIC_REDRAWS} random points within {GENERIC_SPREAD:g} down "
+            f"to {closest / 2:.2g} of it were all outside the model's domain (not finite); "
+            "the point is on the edge of the domain, where steering cannot start"
+        )
     return best
 
 
@@ -235,8 +270,56 @@ def symbolic_model(system: ControlSystem, point: Sequence[object] | State) -> Lo
     The point is made exact (:func:`exact_point`) and the symbolic work is
     cached per (system, point); the result is converted to a
     :class:`TriangularSystem` and compiled coordinate maps.
+
+    An exact point that is not rational (``pi/2``, ``sqrt(2)``) is used as its
+    float (shortest decimal), as a decimal input is: the exact approximation at an
+    algebraic point costs minutes of symbolic work where the floating-point one
+    takes a second, and a local model only guides the steering (every plan is
+    re-simulated on the true system).  What the float would blur, whether the
+    point is regular, is decided first at the exact point (:func:`exact_regularity`).
+
+    Raises
+    ------
+    SingularPointError
+        The point is singular (decided exactly at an exact point).
+    NotBracketGeneratingError
+        The system is not bracket generating there.
     """
-    return _symbolic_model(system, exact_point(point))
+    exact = exact_point(point)
+    if not all(v.is_Rational for v in exact):
+        exact_regularity(system, exact)
+        exact = tuple(sp.Rational(repr(float(v))) for v in exact)
+    return _symbolic_model(system, exact)
+
+
+@lru_cache(maxsize=32)
+def exact_regularity(system: ControlSystem, point: tuple[sp.Expr, ...]) -> tuple[int, ...]:
+    """The growth vector at an exact ``point`` (:func:`nilpotent.core.analysis.filtration.analyze`,
+    the certified decisions), after checking that the point is regular.
+
+    Raises
+    ------
+    SingularPointError
+        The point is singular.
+    NotBracketGeneratingError
+        The system is not bracket generating there.
+    """
+    from nilpotent.core.analysis.filtration import ANALYSIS_TIME_BUDGET, analyze
+    from nilpotent.planning import budget
+
+    left = budget.seconds_left()
+    filt = analyze(system, point, time_budget=min(ANALYSIS_TIME_BUDGET, max(0.5, left)))
+    fpoint = np.array([float(v) for v in point])
+    if not filt.bracket_generating:
+        raise NotBracketGeneratingError(
+            f"{system.name} is not bracket generating at {_fmt(fpoint)}"
+        )
+    if not filt.regular:
+        raise SingularPointError(
+            f"{_fmt(fpoint)} is a singular point of {system.name} "
+            f"(growth {tuple(filt.growth_vector)}, generic {tuple(filt.generic_growth_vector)})"
+        )
+    return tuple(filt.growth_vector)
 
 
 @lru_cache(maxsize=32)

@@ -53,6 +53,7 @@ import numpy as np
 
 from nilpotent.errors import PlanningError
 from nilpotent.numeric.types import State
+from nilpotent.planning import budget
 from nilpotent.planning.controls import (
     InputSignal,
     Segment,
@@ -225,6 +226,7 @@ def _levenberg_marquardt(
     for _ in range(max_iter):
         if err <= UNIT_TOL:
             break
+        budget.check("steering the nilpotent approximation (Levenberg-Marquardt)")
         jjt = jac @ jac.T
         improved = False
         for _ in range(12):

@@ -94,6 +94,7 @@ class World:
     _blocked: Any = field(init=False, repr=False)
     _centres: Any = field(init=False, repr=False)
     _radii: Any = field(init=False, repr=False)
+    _tree: Any = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         shapes: list[BaseGeometry] = [shapely.Polygon(p) for p in self.polygons]
@@ -117,6 +118,24 @@ class World:
         object.__setattr__(self, "_centres", shapely.points([c for c, _ in self.discs])
                            if self.discs else None)
         object.__setattr__(self, "_radii", np.array([r for _, r in self.discs], dtype=float))
+        # discs through a spatial index: the pairs part-disc near enough, not all of them
+        object.__setattr__(self, "_tree", shapely.STRtree(self._centres)
+                           if self.discs else None)
+
+    def _disc_clearance(self, flat: np.ndarray) -> np.ndarray:
+        """``min_j dist(g, c_j) − r_j`` for each geometry of ``flat`` (1-D), exactly: the
+        nearest centre bounds it, and only centres within that bound plus the largest
+        radius can do better (:class:`shapely.STRtree` queries)."""
+        radii = self._radii
+        (gi, ci), dist = self._tree.query_nearest(flat, return_distance=True, all_matches=False)
+        bound = np.full(flat.size, np.inf)
+        np.minimum.at(bound, gi, dist - radii[ci])
+        # a centre j beats the bound only if dist_j < bound + r_j <= bound + max r
+        gi, ci = self._tree.query(flat, predicate="dwithin", distance=bound + radii.max())
+        out = bound.copy()
+        if gi.size:
+            np.minimum.at(out, gi, shapely.distance(flat[gi], self._centres[ci]) - radii[ci])
+        return out
 
     def clearance(self, geoms: np.ndarray, radii: np.ndarray | float = 0.0) -> np.ndarray:
         """Distance of each geometry to the obstacles and the outside of the bounds, minus
@@ -128,9 +147,9 @@ class World:
         out = np.full(geoms.shape, np.inf)
         if self._blocked is not None:
             out = shapely.distance(geoms, self._blocked)
-        if self._centres is not None:
-            d = shapely.distance(geoms[..., None], self._centres) - self._radii
-            out = np.minimum(out, d.min(axis=-1))
+        if self._centres is not None and geoms.size:
+            d = self._disc_clearance(geoms.ravel()).reshape(geoms.shape)
+            out = np.minimum(out, d)
         return out - radii
 
     def collides(
@@ -150,9 +169,19 @@ class World:
             out[~flat] = shapely.dwithin(  # pyright: ignore[reportCallIssue]
                 geoms[~flat], self._blocked, reach[~flat]  # pyright: ignore[reportArgumentType]
             )
-        if self._centres is not None:
-            near = shapely.dwithin(geoms[..., None], self._centres, reach[..., None] + self._radii)
-            out |= near.any(axis=-1)
+        if self._centres is not None and geoms.size:
+            flat, far = geoms.ravel(), np.asarray(reach, dtype=float).ravel()
+            disc_r: np.ndarray = self._radii
+            gi, ci = self._tree.query(flat, predicate="dwithin", distance=far + disc_r.max())
+            if gi.size:
+                # shapely's stubs take a scalar distance; dwithin is vectorised over it
+                near = shapely.dwithin(  # pyright: ignore[reportCallIssue]
+                    flat[gi], self._centres[ci],
+                    far[gi] + disc_r[ci],  # pyright: ignore[reportArgumentType]
+                )
+                hit = np.zeros(flat.size, dtype=bool)
+                hit[gi[near]] = True
+                out |= hit.reshape(geoms.shape)
         return out
 
     def point_clearance(self, xy: np.ndarray) -> np.ndarray:
