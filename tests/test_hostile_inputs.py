@@ -98,7 +98,7 @@ def test_an_unexpected_exception_is_an_internal_error_exit_70(run_cli, monkeypat
     assert status == 70 and "Traceback" in err and "planted bug" in err
 
 
-CLI = [sys.executable, "-c", "from nilpotent.cli import run; run()"]
+CLI = [sys.executable, "-m", "nilpotent"]  # the entry point: signal handlers first
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
 
 

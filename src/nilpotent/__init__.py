@@ -3,8 +3,10 @@ of driftless control systems.
 
 The public API is the list of names below (``__all__``); the modules they come
 from are the implementation and may move.  The names are resolved lazily
-(PEP 562), so ``import nilpotent`` stays light and ``nilpotent.core`` never
-pulls in the numeric stack (scipy, numba, matplotlib)::
+(PEP 562), so ``import nilpotent`` stays light (the standard library only: the
+command line's entry point installs its signal handlers before anything heavy
+loads) and ``nilpotent.core`` never pulls in the numeric stack (scipy, numba,
+matplotlib)::
 
     import nilpotent as nil
     snake = nil.get_model("trident-snake")
@@ -21,13 +23,10 @@ from this file's syntax tree) to know where each name lives.  The modules
 
 from __future__ import annotations
 
-import ast
 import importlib
 from functools import cache
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from nilpotent.core.system import ControlSystem as ControlSystem
 from nilpotent.errors import NilpotentError as NilpotentError
 from nilpotent.version import __version__ as __version__
 
@@ -52,6 +51,7 @@ if TYPE_CHECKING:
     from nilpotent.core.points import parse_point as parse_point
     from nilpotent.core.privileged import PrivilegedCoordinates as PrivilegedCoordinates
     from nilpotent.core.privileged import privileged_coordinates as privileged_coordinates
+    from nilpotent.core.system import ControlSystem as ControlSystem
     from nilpotent.models import MODELS as MODELS
     from nilpotent.models import ModelInfo as ModelInfo
     from nilpotent.models import TridentGeometry as TridentGeometry
@@ -145,6 +145,9 @@ __all__ = [
 @cache
 def _lazy_imports() -> dict[str, str]:
     """Public name -> defining module, read from the ``if TYPE_CHECKING:`` block above."""
+    import ast  # here, not at the top: ``import nilpotent`` stays as light as can be
+    from pathlib import Path
+
     tree = ast.parse(Path(__file__).read_text(encoding="utf-8"))
     found: dict[str, str] = {}
     for node in tree.body:
@@ -157,7 +160,8 @@ def _lazy_imports() -> dict[str, str]:
 
 
 def __getattr__(name: str) -> Any:
-    module = _lazy_imports().get(name)
+    # a submodule (``from nilpotent import progress``) asks here first: answered at once
+    module = _lazy_imports().get(name) if name in __all__ else None
     if module is None:
         raise AttributeError(f"module 'nilpotent' has no attribute {name!r}")
     value = getattr(importlib.import_module(module), name)

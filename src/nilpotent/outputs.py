@@ -28,6 +28,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from nilpotent import interrupts
 from nilpotent.errors import OptionError, OutputError
 
 __all__ = [
@@ -192,6 +193,7 @@ def write_atomically(path: str | os.PathLike[str], suffix: str | None = None) ->
     os.umask(mask)
     try:
         yield tmp_path
+        interrupts.checkpoint()  # an interrupt whose exception was swallowed: not in place
         os.chmod(tmp_path, 0o666 & ~mask)  # mkstemp makes it private; the result is ordinary
         os.replace(tmp_path, target)
     except OSError as exc:
