@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import re
 from pathlib import Path
@@ -15,9 +17,37 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def result(tmp_path_factory):
-    out = tmp_path_factory.mktemp("reproduce") / "paper"
-    return reproduce(out, quick=True)
+def replaced(tmp_path_factory):
+    """One quick reproduction (the suite's only one: it costs the most), run by the CLI
+    over a previous reproduction's folder (an ``audit.json`` of the schema, a stale
+    file): the CLI's status and stdout, the stale file, and the
+    :class:`~nilpotent.report.Reproduction` the command's library call returned."""
+    import nilpotent.report.pipeline as pipeline
+    from nilpotent.cli import main
+
+    target = tmp_path_factory.mktemp("reproduce") / "paper"
+    (target / "data").mkdir(parents=True)
+    (target / "audit.json").write_text(json.dumps({"schema": AUDIT_SCHEMA}))
+    marker = target / "data" / "stale.txt"
+    marker.write_text("old")
+    calls = []
+    real = pipeline.reproduce
+
+    def recording(*args, **kwargs):
+        calls.append(real(*args, **kwargs))
+        return calls[-1]
+
+    stdout = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stdout(stdout):
+        patch.setattr(pipeline, "reproduce", recording)
+        status = main(["reproduce", "--out", str(target), "--quick", "--json", "--quiet"])
+    assert len(calls) == 1
+    return status, stdout.getvalue(), marker, calls[0]
+
+
+@pytest.fixture(scope="module")
+def result(replaced):
+    return replaced[3]
 
 
 def test_written_files(result) -> None:
@@ -67,18 +97,17 @@ def test_refuses_a_foreign_folder(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine"]  # no temporary left
 
 
-def test_cli_replaces_a_previous_reproduction(result, run_cli, tmp_path: Path) -> None:
-    status, out, err = run_cli("reproduce", "--out", str(tmp_path / "missing" / "x"), "--json")
+def test_cli_replaces_a_previous_reproduction(replaced, run_cli, tmp_path: Path) -> None:
+    status, out, _ = run_cli("reproduce", "--out", str(tmp_path / "missing" / "x"), "--json")
     assert status == 2 and json.loads(out)["error"]["kind"] == "option"
     # replacing an earlier result: the folder is swapped whole
+    status, out, marker, result = replaced
     target = result.out_dir
-    marker = target / "data" / "stale.txt"
-    marker.write_text("old")
-    status, out, err = run_cli("reproduce", "--out", str(target), "--quick", "--json")
-    assert status == 0, err
+    assert status == 0
     summary = json.loads(out)
     assert summary["schema"] == "nilpotent/reproduce@1"
     assert Path(summary["index"]).is_file()
+    assert Path(summary["index"]).parent == target
     assert not marker.exists()
     leftovers = [p.name for p in target.parent.iterdir() if p.name.startswith(".")]
     assert leftovers == []

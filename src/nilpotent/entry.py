@@ -28,5 +28,5 @@ def run() -> None:
         code = finish(main(argv))
     except KeyboardInterrupt:  # before the command line could report it (its import)
         code = interrupts.early_exit(argv)
-    interrupts.close()
+    interrupts.exiting()  # a signal from here on is ignored: the status is decided
     sys.exit(code)

@@ -21,9 +21,11 @@ The command line (:mod:`nilpotent.entry`, then :func:`nilpotent.cli.main`) insta
   compiled code) therefore only delays the stop.
 
 Once the command line has reported the interruption, or finished, :func:`close`
-turns the handlers into records only: nothing is raised while the interpreter
-shuts down.  This module imports only the standard library, so that it can be
-the first thing the entry point loads.
+turns the handlers into records only, and :func:`exiting` ignores the signals while
+the interpreter shuts down (which would otherwise put back their default action:
+a late SIGTERM would kill the process after its status was decided).  This module
+imports only the standard library, so that it can be the first thing the entry point
+loads.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ __all__ = [
     "close",
     "deferred",
     "exit_code",
+    "exiting",
     "install",
     "installed",
     "pending",
@@ -149,6 +152,20 @@ def close() -> None:
     """From now on only record signals (the interruption was reported, or the work is
     over): nothing is raised while the program reports, flushes and exits."""
     _state["closed"] = True
+
+
+def exiting() -> None:
+    """Ignore SIGINT and SIGTERM from here to the end of the process (call it right
+    before ``sys.exit``).
+
+    While the interpreter shuts down it puts back the default action of every
+    signal that has a Python handler, so a late SIGTERM would kill the process
+    (status -15) after its status was decided; an ignored signal stays ignored.
+    """
+    _state["closed"] = True
+    for signum in list(_previous):
+        with contextlib.suppress(ValueError, OSError):
+            signal.signal(signum, signal.SIG_IGN)
 
 
 def _handling_interrupt() -> bool:

@@ -231,5 +231,5 @@ def run() -> None:
         code = finish(main())
     except KeyboardInterrupt:
         code = interrupts.early_exit(sys.argv[1:])
-    interrupts.close()
+    interrupts.exiting()  # a signal from here on is ignored: the status is decided
     sys.exit(code)
