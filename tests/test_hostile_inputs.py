@@ -202,7 +202,9 @@ def test_progress_prints_plain_lines_on_a_pipe(monkeypatch):
     monkeypatch.setitem(prog._state, "enabled", True)
     stream = io.StringIO()
     with prog.progress("exact ranks [/bold]\x1b", total=3, stream=stream) as bar:
-        time.sleep(0.2)  # a long step that reports nothing still shows life
+        end = time.monotonic() + 30  # a long step that reports nothing still shows life
+        while "still running" not in stream.getvalue() and time.monotonic() < end:
+            time.sleep(0.05)  # (waited for, not timed: a loaded machine is slow)
         for _ in range(3):
             time.sleep(0.02)
             bar.advance()
