@@ -84,7 +84,8 @@ def _check_sweep(code: int, stdout: str, folder: Path) -> None:
 def test_a_signal_at_any_moment_gives_130_or_143_and_leaves_nothing_half_written(tmp_path):
     jobs = []
     for k, (delay, signum) in enumerate(ANALYZE):
-        jobs.append(("analyze", ["analyze", "unicycle"], delay, signum, False, k))
+        json_out = ["--json"] if k % 2 else []  # human output and --json alike
+        jobs.append(("analyze", ["analyze", "unicycle", *json_out], delay, signum, False, k))
     for k, (delay, signum) in enumerate(SWEEP):
         jobs.append(("sweep", ["sweep", "unicycle", "--bracket", "1,2", "--samples", "40",
                                "--radius", "0.1", "--out", "rows.csv", "--json"],
@@ -98,7 +99,7 @@ def test_a_signal_at_any_moment_gives_130_or_143_and_leaves_nothing_half_written
 
     with ThreadPoolExecutor(max_workers=6) as pool:
         results = list(pool.map(one, jobs))
-    for (name, _args, delay, signum, _twice, _k), folder, (code, stdout, stderr) in results:
+    for (name, args, delay, signum, _twice, _k), folder, (code, stdout, stderr) in results:
         where = f"{name} at {delay} s ({signal.Signals(signum).name}): exit {code}\n{stderr}"
         assert code in (0, SIGNALS[signum]), where
         assert "Traceback" not in stderr, where
@@ -108,6 +109,11 @@ def test_a_signal_at_any_moment_gives_130_or_143_and_leaves_nothing_half_written
                 where)
         if name == "sweep":
             _check_sweep(code, stdout, folder)
+        elif "--json" in args:
+            result = json.loads(stdout)  # one JSON object: the result or the interruption
+            assert code == 0 or "bracket_generating" in result or (
+                result["error"]["kind"] == "interrupted"), where
+            assert code != 0 or "bracket_generating" in result, where
 
 
 # --- the mechanism, in this process ------------------------------------------------------

@@ -73,8 +73,9 @@ def move_into_place(tmp: Path, target: Path, existed: bool = True) -> None:
     check_target(target)  # again: what is there now must still be a previous reproduction
     interrupts.checkpoint()  # an interrupt whose exception was swallowed: not in place
     if target.exists():
-        old = Path(tempfile.mkdtemp(prefix=temporary_prefix(target, "old"), dir=target.parent))
         with interrupts.deferred():  # Ctrl-C never leaves the target moved away
+            old = Path(tempfile.mkdtemp(prefix=temporary_prefix(target, "old"),
+                                        dir=target.parent))
             os.replace(target, old / target.name)
             os.replace(tmp, target)
             shutil.rmtree(old, ignore_errors=True)
