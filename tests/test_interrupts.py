@@ -116,6 +116,20 @@ def test_a_signal_at_any_moment_gives_130_or_143_and_leaves_nothing_half_written
             assert code != 0 or "bracket_generating" in result, where
 
 
+def test_the_entry_point_loads_nothing_heavy_before_its_handlers():
+    import tomllib
+
+    project = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    assert project["project"]["scripts"]["nilpotent"] == "nilpotent.entry:run"
+    heavy = ("typer", "rich", "sympy", "symengine", "flint", "numpy", "scipy", "heyoka",
+             "numba", "matplotlib", "ompl")
+    code = ("import sys, nilpotent.entry, nilpotent.__init__; "
+            f"print(','.join(m for m in {heavy!r} if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=ENV, check=True, timeout=120)
+    assert done.stdout.strip() == ""
+
+
 # --- the mechanism, in this process ------------------------------------------------------
 @pytest.fixture
 def handlers():
