@@ -32,16 +32,18 @@ ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
 SIGNALS = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
-def _blocked() -> None:  # runs in the child between fork and exec
-    signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
-
-
 def _interrupt(args: list[str], delay: float, signum: int, folder: Path, twice: bool = False
                ) -> tuple[int, str, str]:
-    proc = subprocess.Popen(
-        [*CLI, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,
-        cwd=folder, preexec_fn=_blocked,
-    )
+    # the child inherits the blocked signals from this (pool) thread's mask, through
+    # fork and exec (no preexec_fn: it is unsafe with threads)
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, set(SIGNALS))
+    try:
+        proc = subprocess.Popen(
+            [*CLI, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV,
+            cwd=folder,
+        )
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
     time.sleep(delay)
     proc.send_signal(signum)
     if twice:  # a second signal during the clean-up must not abort the interpreter
