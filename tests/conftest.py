@@ -74,3 +74,38 @@ def run_cli(capsys):
         return status, out, err
 
     return _run
+
+
+@pytest.fixture(scope="session")
+def quick_reproduction(tmp_path_factory):
+    """One quick ``reproduce`` (the costliest computation of the suite, shared by
+    ``test_report_pipeline.py`` and ``test_browser.py`` when they run in one process), run
+    by the CLI over a previous reproduction's folder (an ``audit.json`` of the schema and
+    a stale file): ``(status, stdout, stale file, Reproduction)``, the last being what the
+    command's library call returned."""
+    import contextlib
+    import io
+    import json
+
+    import nilpotent.report.pipeline as pipeline
+    from nilpotent.cli import main
+    from nilpotent.report import AUDIT_SCHEMA
+
+    target = tmp_path_factory.mktemp("reproduce") / "paper"
+    (target / "data").mkdir(parents=True)
+    (target / "audit.json").write_text(json.dumps({"schema": AUDIT_SCHEMA}))
+    marker = target / "data" / "stale.txt"
+    marker.write_text("old")
+    calls = []
+    real = pipeline.reproduce
+
+    def recording(*args, **kwargs):
+        calls.append(real(*args, **kwargs))
+        return calls[-1]
+
+    stdout = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stdout(stdout):
+        patch.setattr(pipeline, "reproduce", recording)
+        status = main(["reproduce", "--out", str(target), "--quick", "--json", "--quiet"])
+    assert len(calls) == 1, (status, stdout.getvalue())
+    return status, stdout.getvalue(), marker, calls[0]

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import re
 from pathlib import Path
@@ -17,32 +15,10 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def replaced(tmp_path_factory):
-    """One quick reproduction (the suite's only one: it costs the most), run by the CLI
-    over a previous reproduction's folder (an ``audit.json`` of the schema, a stale
-    file): the CLI's status and stdout, the stale file, and the
-    :class:`~nilpotent.report.Reproduction` the command's library call returned."""
-    import nilpotent.report.pipeline as pipeline
-    from nilpotent.cli import main
-
-    target = tmp_path_factory.mktemp("reproduce") / "paper"
-    (target / "data").mkdir(parents=True)
-    (target / "audit.json").write_text(json.dumps({"schema": AUDIT_SCHEMA}))
-    marker = target / "data" / "stale.txt"
-    marker.write_text("old")
-    calls = []
-    real = pipeline.reproduce
-
-    def recording(*args, **kwargs):
-        calls.append(real(*args, **kwargs))
-        return calls[-1]
-
-    stdout = io.StringIO()
-    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stdout(stdout):
-        patch.setattr(pipeline, "reproduce", recording)
-        status = main(["reproduce", "--out", str(target), "--quick", "--json", "--quiet"])
-    assert len(calls) == 1
-    return status, stdout.getvalue(), marker, calls[0]
+def replaced(quick_reproduction):
+    """The suite's one quick reproduction (``tests/conftest.py``): the CLI replacing a
+    previous reproduction's folder."""
+    return quick_reproduction
 
 
 @pytest.fixture(scope="module")
