@@ -21,7 +21,7 @@ PACKAGE = Path(nilpotent.__file__).parent
 
 #: Bottom to top.  Names on one line form one layer.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("errors", "progress", "outputs", "strict_json", "version", "typeset"),
+    ("errors", "progress", "outputs", "strict_json", "version", "typeset", "interrupts"),
     ("core",),
     ("numeric",),
     ("models",),
@@ -30,7 +30,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("viz",),
     ("report",),
     ("cli",),
-    ("__init__", "__main__"),
+    ("__init__", "__main__", "entry"),
 )
 RANK = {name: k for k, names in enumerate(LAYERS) for name in names}
 

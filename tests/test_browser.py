@@ -76,12 +76,11 @@ def chromium() -> str:
 
 
 @pytest.fixture(scope="module")
-def site(tmp_path_factory) -> Path:
-    from nilpotent.report import reproduce
-
-    out = tmp_path_factory.mktemp("browser") / "paper"
-    reproduce(out, quick=True)
-    return out
+def site(quick_reproduction) -> Path:
+    """The suite's one quick reproduction (``tests/conftest.py``; read only here)."""
+    status, _, _, result = quick_reproduction
+    assert status == 0
+    return result.out_dir
 
 
 def _run(chromium: str, *args: str, timeout: int = 180) -> subprocess.CompletedProcess[str]:

@@ -98,7 +98,7 @@ def test_an_unexpected_exception_is_an_internal_error_exit_70(run_cli, monkeypat
     assert status == 70 and "Traceback" in err and "planted bug" in err
 
 
-CLI = [sys.executable, "-c", "from nilpotent.cli import run; run()"]
+CLI = [sys.executable, "-m", "nilpotent"]  # the entry point: signal handlers first
 ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
 
 
@@ -202,7 +202,9 @@ def test_progress_prints_plain_lines_on_a_pipe(monkeypatch):
     monkeypatch.setitem(prog._state, "enabled", True)
     stream = io.StringIO()
     with prog.progress("exact ranks [/bold]\x1b", total=3, stream=stream) as bar:
-        time.sleep(0.2)  # a long step that reports nothing still shows life
+        end = time.monotonic() + 30  # a long step that reports nothing still shows life
+        while "still running" not in stream.getvalue() and time.monotonic() < end:
+            time.sleep(0.05)  # (waited for, not timed: a loaded machine is slow)
         for _ in range(3):
             time.sleep(0.02)
             bar.advance()

@@ -222,7 +222,7 @@ def _systems(draw):
             "fields": fields}
 
 
-@settings(max_examples=60, deadline=2000)
+@settings(max_examples=60, deadline=None)
 @given(_systems(), st.sampled_from([".toml", ".json"]))
 def test_random_systems_round_trip_through_files(tmp_path_factory, data, suffix):
     s = system_from_dict(data, default_name="random")
@@ -262,7 +262,7 @@ def _mutated_text(draw):
     return text
 
 
-@settings(max_examples=300, deadline=2000, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_mutated_text())
 def test_fuzz_mutated_toml_loads_or_raises_model_errors(tmp_path_factory, text):
     p = tmp_path_factory.mktemp("fuzz") / "m.toml"
@@ -302,7 +302,7 @@ def _mutated_dict(draw):
     return data
 
 
-@settings(max_examples=300, deadline=2000)
+@settings(max_examples=300, deadline=None)
 @given(_mutated_dict())
 def test_fuzz_mutated_structures_load_or_raise_model_errors(data):
     try:

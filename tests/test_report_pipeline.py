@@ -15,9 +15,15 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def result(tmp_path_factory):
-    out = tmp_path_factory.mktemp("reproduce") / "paper"
-    return reproduce(out, quick=True)
+def replaced(quick_reproduction):
+    """The suite's one quick reproduction (``tests/conftest.py``): the CLI replacing a
+    previous reproduction's folder."""
+    return quick_reproduction
+
+
+@pytest.fixture(scope="module")
+def result(replaced):
+    return replaced[3]
 
 
 def test_written_files(result) -> None:
@@ -67,18 +73,17 @@ def test_refuses_a_foreign_folder(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine"]  # no temporary left
 
 
-def test_cli_replaces_a_previous_reproduction(result, run_cli, tmp_path: Path) -> None:
-    status, out, err = run_cli("reproduce", "--out", str(tmp_path / "missing" / "x"), "--json")
+def test_cli_replaces_a_previous_reproduction(replaced, run_cli, tmp_path: Path) -> None:
+    status, out, _ = run_cli("reproduce", "--out", str(tmp_path / "missing" / "x"), "--json")
     assert status == 2 and json.loads(out)["error"]["kind"] == "option"
     # replacing an earlier result: the folder is swapped whole
+    status, out, marker, result = replaced
     target = result.out_dir
-    marker = target / "data" / "stale.txt"
-    marker.write_text("old")
-    status, out, err = run_cli("reproduce", "--out", str(target), "--quick", "--json")
-    assert status == 0, err
+    assert status == 0
     summary = json.loads(out)
     assert summary["schema"] == "nilpotent/reproduce@1"
     assert Path(summary["index"]).is_file()
+    assert Path(summary["index"]).parent == target
     assert not marker.exists()
     leftovers = [p.name for p in target.parent.iterdir() if p.name.startswith(".")]
     assert leftovers == []

@@ -190,7 +190,7 @@ def api_pages() -> dict[str, str]:
         "|---|---|---|",
     ]
     pages: dict[str, str] = {}
-    shown: dict[int, tuple[str, str]] = {}
+    shown: dict[int, str] = {}
     for key, members in groups.items():
         members = [(n, o) for n, o in members if n != "__version__"]
         if not members:
@@ -201,11 +201,11 @@ def api_pages() -> dict[str, str]:
         parts = [f"# {title}\n", f"{what[0].upper()}{what[1:]}.\n"]
         for name, obj in members:
             if id(obj) in shown:  # a second name (named like a command): one entry per object
-                page, first = shown[id(obj)]
-                where = "" if page == key else f"{page}.md"
-                parts.append(f"## `{name}`\n\nThe same function as [`{first}`]({where}#{first}).\n")
+                first = shown[id(obj)]
+                target = f"[`{first}`][{_path(obj)}]" if _documented(obj) else f"`{first}`"
+                parts.append(f"## `{name}`\n\nThe same function as {target}.\n")
                 continue
-            shown[id(obj)] = (key, name)
+            shown[id(obj)] = name
             if not _documented(obj):
                 parts.append(f"## `{name}`\n\n{_describe(name, obj)}\n")
                 continue

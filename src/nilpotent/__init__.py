@@ -3,8 +3,10 @@ of driftless control systems.
 
 The public API is the list of names below (``__all__``); the modules they come
 from are the implementation and may move.  The names are resolved lazily
-(PEP 562), so ``import nilpotent`` stays light and ``nilpotent.core`` never
-pulls in the numeric stack (scipy, numba, matplotlib)::
+(PEP 562), so ``import nilpotent`` stays light (the standard library only: the
+command line's entry point installs its signal handlers before anything heavy
+loads) and ``nilpotent.core`` never pulls in the numeric stack (scipy, numba,
+matplotlib)::
 
     import nilpotent as nil
     snake = nil.get_model("trident-snake")
@@ -27,13 +29,10 @@ from this file's syntax tree) to know where each name lives.
 
 from __future__ import annotations
 
-import ast
 import importlib
 from functools import cache
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from nilpotent.core.model.system import ControlSystem as ControlSystem
 from nilpotent.errors import NilpotentError as NilpotentError
 from nilpotent.version import __version__ as __version__
 
@@ -62,6 +61,7 @@ if TYPE_CHECKING:
     from nilpotent.core.model.outline import Limits as Limits
     from nilpotent.core.model.outline import Outline as Outline
     from nilpotent.core.model.points import parse_point as parse_point
+    from nilpotent.core.model.system import ControlSystem as ControlSystem
     from nilpotent.models import MODELS as MODELS
     from nilpotent.models import ModelInfo as ModelInfo
     from nilpotent.models import TridentGeometry as TridentGeometry
@@ -166,6 +166,9 @@ __all__ = [
 def _lazy_imports() -> dict[str, tuple[str, str]]:
     """Public name -> (defining module, name there), read from the ``if TYPE_CHECKING:``
     block above (``from m import f as g`` makes ``g`` the name ``f`` of ``m``)."""
+    import ast  # here, not at the top: ``import nilpotent`` stays as light as can be
+    from pathlib import Path
+
     tree = ast.parse(Path(__file__).read_text(encoding="utf-8"))
     found: dict[str, tuple[str, str]] = {}
     for node in tree.body:
@@ -178,7 +181,8 @@ def _lazy_imports() -> dict[str, tuple[str, str]]:
 
 
 def __getattr__(name: str) -> Any:
-    where = _lazy_imports().get(name)
+    # a submodule (``from nilpotent import progress``) asks here first: answered at once
+    where = _lazy_imports().get(name) if name in __all__ else None
     if where is None:
         raise AttributeError(f"module 'nilpotent' has no attribute {name!r}")
     module, attribute = where

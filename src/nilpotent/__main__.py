@@ -1,5 +1,6 @@
-"""``python -m nilpotent`` runs the command line."""
+"""``python -m nilpotent`` runs the command line (:func:`nilpotent.entry.run`: the signal
+handlers first, then the command)."""
 
-from nilpotent.cli import run
+from nilpotent.entry import run
 
 run()

@@ -28,6 +28,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
+from nilpotent import interrupts
 from nilpotent.errors import OptionError, OutputError
 
 __all__ = [
@@ -149,14 +150,15 @@ def check_writable(path: str | os.PathLike[str] | None, option: str, *, folder: 
     parent = target.parent if str(target.parent) else Path(".")
     if not parent.is_dir():
         raise OptionError(f"{where}: folder {shown_path(parent)} does not exist")
-    try:
-        fd, probe = tempfile.mkstemp(prefix=temporary_prefix(target), dir=parent)
-    except OSError as exc:
-        raise OptionError(f"{where}: cannot write in {shown_path(parent)} ({_reason(exc)})"
-                          ) from None
-    os.close(fd)
-    with contextlib.suppress(OSError):
-        os.unlink(probe)
+    with interrupts.deferred():  # an interrupt never leaves the probe behind
+        try:
+            fd, probe = tempfile.mkstemp(prefix=temporary_prefix(target), dir=parent)
+        except OSError as exc:
+            raise OptionError(f"{where}: cannot write in {shown_path(parent)} ({_reason(exc)})"
+                              ) from None
+        os.close(fd)
+        with contextlib.suppress(OSError):
+            os.unlink(probe)
 
 
 @contextlib.contextmanager
@@ -180,18 +182,22 @@ def write_atomically(path: str | os.PathLike[str], suffix: str | None = None) ->
     if target.is_dir():
         raise OptionError(f"cannot write {shown_path(target)}: it is a folder")
     remove_stale_temporaries(target)
+    tmp_path: Path | None = None
     try:
-        fd, tmp = tempfile.mkstemp(
-            prefix=temporary_prefix(target), suffix=suffix or target.suffix, dir=parent
-        )
-    except OSError as exc:
-        raise OutputError(f"cannot write {shown_path(target)} ({_reason(exc)})") from None
-    os.close(fd)
-    tmp_path = Path(tmp)
-    mask = os.umask(0)
-    os.umask(mask)
-    try:
+        with interrupts.deferred():  # created and known to the clean-up below as one step
+            try:
+                fd, tmp = tempfile.mkstemp(
+                    prefix=temporary_prefix(target), suffix=suffix or target.suffix, dir=parent
+                )
+            except OSError as exc:
+                raise OutputError(f"cannot write {shown_path(target)} ({_reason(exc)})"
+                                  ) from None
+            os.close(fd)
+            tmp_path = Path(tmp)
+        mask = os.umask(0)
+        os.umask(mask)
         yield tmp_path
+        interrupts.checkpoint()  # an interrupt whose exception was swallowed: not in place
         os.chmod(tmp_path, 0o666 & ~mask)  # mkstemp makes it private; the result is ordinary
         os.replace(tmp_path, target)
     except OSError as exc:
@@ -201,5 +207,5 @@ def write_atomically(path: str | os.PathLike[str], suffix: str | None = None) ->
         raise
     finally:
         with contextlib.suppress(OSError):
-            if tmp_path.exists():
+            if tmp_path is not None and tmp_path.exists():
                 tmp_path.unlink()

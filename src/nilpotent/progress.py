@@ -33,6 +33,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TextIO
 
+from nilpotent import interrupts
+
 PLAIN_INTERVAL = 1.0
 """Seconds between two plain progress lines of one task (rate limit off a terminal)."""
 
@@ -82,7 +84,17 @@ class Progress:
         self.update(self.completed + n, detail)
 
     def update(self, completed: int | None = None, detail: str | None = None) -> None:
-        """Set the number of units done and/or the detail text."""
+        """Set the number of units done and/or the detail text.
+
+        Also a safe point for a recorded Ctrl-C / SIGTERM
+        (:func:`nilpotent.interrupts.checkpoint`).
+
+        Raises
+        ------
+        nilpotent.interrupts.Interrupted
+            A signal was received and not yet raised (or its exception was swallowed).
+        """
+        interrupts.checkpoint()
         if completed is not None:
             self.completed = int(completed)
         if detail is not None:

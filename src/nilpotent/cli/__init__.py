@@ -10,7 +10,10 @@ Every way a run can end is decided here, so that each gives a clear answer:
   under ``--json`` either prints one ``{"error": {"kind", "message"}}`` object on
   stdout, nothing else;
 - 130 / 143: interrupted by Ctrl-C / SIGTERM (``timeout``, ``kill``, CI), handled
-  alike: partial outputs are removed on the way out;
+  alike at any moment (:mod:`nilpotent.interrupts`: the signal is recorded, raised
+  only at a safe point, never inside an import): partial outputs are removed on
+  the way out, and the record decides even when a library swallowed or converted
+  the exception;
 - 70: an internal error (a bug): one line asking to report it, kind
   ``"internal"`` under ``--json``; the traceback only with ``--debug``.
 
@@ -22,13 +25,13 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import sys
 import traceback
 from collections.abc import Sequence
 
 import typer
 
+from nilpotent import interrupts
 from nilpotent.cli import (  # noqa: F401  (each module registers its command)
     cmd_analyze,
     cmd_approximate,
@@ -40,22 +43,24 @@ from nilpotent.cli import (  # noqa: F401  (each module registers its command)
     cmd_simulate,
     cmd_sweep,
 )
-from nilpotent.cli.app import app, bounded_message, literal, report_error
+from nilpotent.cli.app import (
+    app,
+    bounded_message,
+    literal,
+    report_error,
+    reset_stdout,
+    stdout_written,
+)
 from nilpotent.errors import NilpotentError
+from nilpotent.interrupts import EXIT_INTERRUPTED, EXIT_TERMINATED
 
 EXIT_USAGE = 2
 EXIT_INTERNAL = 70
-EXIT_INTERRUPTED = 130
-EXIT_TERMINATED = 143
 
 GLOBAL_FLAGS = ("--debug", "--quiet")
 """Flags read by :func:`main` wherever they stand (before a ``--``)."""
 
 REPORT_URL = "https://github.com/nilpotent-robotics/nilpotent/issues"
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised like Ctrl-C so that every ``finally`` cleans up."""
 
 
 def _split_flags(args: list[str]) -> tuple[list[str], set[str]]:
@@ -81,33 +86,14 @@ def _wants_json(args: list[str]) -> bool:
     return False
 
 
-_received: dict[str, bool] = {"term": False}
-
-
-def _on_sigterm(signum, frame):  # pragma: no cover - exercised in a subprocess test
-    _received["term"] = True
-    raise Terminated()
-
-
-@contextlib.contextmanager
-def _sigterm_as_interrupt():
-    """Handle SIGTERM like Ctrl-C while the command runs (main thread only)."""
-    try:
-        previous = signal.signal(signal.SIGTERM, _on_sigterm)
-    except (ValueError, OSError):  # not the main thread: leave signals alone
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 def _interrupted(as_json: bool) -> int:
-    term = _received["term"]
-    why = "terminated (SIGTERM)" if term else "interrupted"
-    report_error("interrupted", f"{why}; partial outputs were removed", as_json)
-    return EXIT_TERMINATED if term else EXIT_INTERRUPTED
+    interrupts.close()  # reported from here on: a second signal is recorded, not raised
+    code = interrupts.exit_code() or EXIT_INTERRUPTED
+    why = "terminated (SIGTERM)" if code == EXIT_TERMINATED else "interrupted"
+    # under --json stdout holds one object: the result, if it was printed before the signal
+    report_error("interrupted", f"{why}; partial outputs were removed",
+                 as_json and not stdout_written())
+    return code
 
 
 def _internal_error(exc: BaseException, as_json: bool, debug: bool) -> int:
@@ -146,56 +132,83 @@ def _silence_stdout() -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI on ``argv`` (default: ``sys.argv[1:]``) and return the exit status."""
+    """Run the CLI on ``argv`` (default: ``sys.argv[1:]``) and return the exit status.
+
+    SIGINT and SIGTERM are handled while it runs (:mod:`nilpotent.interrupts`; the
+    handlers are put back afterwards when this call installed them, in the main
+    thread only): an interrupt at any moment returns 130 / 143.
+    """
     from nilpotent import progress
 
-    command = typer.main.get_command(app)
+    owned = interrupts.install()
     args, flags = _split_flags(list(sys.argv[1:] if argv is None else argv))
     as_json = _wants_json(args)
-    debug = "--debug" in flags
     was_enabled = progress.enabled()
+    try:
+        return _run_command(args, flags, as_json)
+    except KeyboardInterrupt:  # raised before (or after) the command's own handling
+        return _interrupted(as_json)
+    finally:
+        interrupts.close()  # the command is over: a later signal is recorded, not raised
+        progress.configure(enabled=was_enabled)
+        if owned:
+            interrupts.uninstall()
+
+
+def _run_command(args: list[str], flags: set[str], as_json: bool) -> int:
+    from nilpotent import progress
+
+    debug = "--debug" in flags
     progress.configure(enabled="--quiet" not in flags)
-    _received["term"] = False
+    reset_stdout()
     if sys.stdout is None:  # started with stdout closed (>&-): no result could be shown
         report_error("output", "stdout is closed: nothing could be printed (run without "
                      "closing stdout, or redirect it to a file)", False)
-        progress.configure(enabled=was_enabled)
         return EXIT_USAGE
     try:
-        with _sigterm_as_interrupt():
-            result = command.main(args=args, prog_name="nilpotent", standalone_mode=False)
+        command = typer.main.get_command(app)
+        result = command.main(args=args, prog_name="nilpotent", standalone_mode=False)
         code = int(result) if isinstance(result, int) else 0
-        if code == EXIT_INTERRUPTED:  # typer turns Ctrl-C (and our SIGTERM) into Exit(130)
+        if interrupts.pending() is not None or code == EXIT_INTERRUPTED:
+            # typer turns Ctrl-C into Exit(130); a signal whose exception a library
+            # swallowed still ends the run here (the record is the source of truth)
             return _interrupted(as_json)
         if code == 0 and sys.stdout is not None:
             sys.stdout.flush()
         return code
-    except typer.Exit as exc:
+    except BaseException as exc:
+        if interrupts.pending() is not None:  # whatever the exception became on the way
+            return _interrupted(as_json)  # (an ImportError of a C extension, an Abort)
+        return _classify(exc, as_json, debug)
+
+
+def _classify(exc: BaseException, as_json: bool, debug: bool) -> int:
+    """The exit status (and report) of a command that ended with ``exc``."""
+    if isinstance(exc, typer.Exit):
         if exc.exit_code == EXIT_INTERRUPTED:
             return _interrupted(as_json)
         return int(exc.exit_code)
-    except (typer.Abort, KeyboardInterrupt):
+    if isinstance(exc, typer.Abort | KeyboardInterrupt):
         return _interrupted(as_json)
-    except typer.TyperException as exc:  # usage errors of the option parser
+    if isinstance(exc, typer.TyperException):  # usage errors of the option parser
         return _usage_error(exc, as_json)
-    except NilpotentError as exc:  # raised while parsing options (bounded integers, ...)
+    if isinstance(exc, NilpotentError):  # raised while parsing options (bounded integers)
         report_error(exc.kind, str(exc), as_json)
         return EXIT_USAGE
-    except BrokenPipeError:
+    if isinstance(exc, BrokenPipeError):
         _silence_stdout()  # the reader of stdout went away (| head): not an error to report
         return 1
-    except RecursionError:
+    if isinstance(exc, RecursionError):
         report_error("option", "input too deeply nested", as_json)
         return EXIT_USAGE
-    except Exception as exc:
+    if isinstance(exc, Exception):
         return _internal_error(exc, as_json, debug)
-    finally:
-        progress.configure(enabled=was_enabled)
+    raise exc  # SystemExit, GeneratorExit: not a command's outcome
 
 
-def run() -> None:
-    """Console-script entry point."""
-    code = main()
+def finish(code: int) -> int:
+    """Flush stdout after :func:`main` and return the final exit status (a result that
+    cannot be printed is an error, not a success)."""
     if sys.stdout is not None:
         try:
             sys.stdout.flush()
@@ -203,4 +216,20 @@ def run() -> None:
             _silence_stdout()
             report_error("output", "cannot print the result on stdout", False)
             code = code or EXIT_USAGE
+    return code
+
+
+def run() -> None:
+    """Console-script entry point of a process (in-process callers use :func:`main`).
+
+    :func:`nilpotent.entry.run`, the one ``pyproject.toml`` names, installs the
+    signal handlers before importing this module; here they come after its imports.
+    The handlers stay in place (recording only) until the process has exited.
+    """
+    try:
+        interrupts.install()
+        code = finish(main())
+    except KeyboardInterrupt:
+        code = interrupts.early_exit(sys.argv[1:])
+    interrupts.exiting()  # a signal from here on is ignored: the status is decided
     sys.exit(code)

@@ -25,6 +25,7 @@ from typing import Annotated, Any, TypeVar
 
 import typer
 
+from nilpotent import interrupts
 from nilpotent.errors import (
     ComputationLimitError,
     NilpotentError,
@@ -226,13 +227,29 @@ MESSAGE_LIMIT = 2000
 """Longest error message printed, in characters (the rest is cut, with a count)."""
 
 
+_stdout = {"written": False}
+"""Whether this run printed its result on stdout (whole: an interrupt waits for the end)."""
+
+
+def stdout_written() -> bool:
+    """Whether the running command has printed its result (:func:`emit_json`) already."""
+    return _stdout["written"]
+
+
+def reset_stdout() -> None:
+    """Forget that a result was printed (at the start of each command)."""
+    _stdout["written"] = False
+
+
 def _write_stdout(text: str) -> None:
     out = sys.stdout
     if out is None:
         raise OutputError("cannot print the result: stdout is closed")
     try:
-        out.write(text)
-        out.flush()
+        with interrupts.deferred():  # Ctrl-C never cuts a JSON object in two
+            out.write(text)
+            out.flush()
+            _stdout["written"] = True
     except BrokenPipeError:
         raise  # the reader went away: main() exits quietly
     except OSError as exc:

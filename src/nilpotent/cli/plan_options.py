@@ -120,7 +120,7 @@ def command_budget(time_limit: float):
     from nilpotent.planning.budget import process_age, time_budget
 
     main_run = getattr(sys.modules.get("__main__"), "run", None)
-    entry = getattr(main_run, "__module__", None) == "nilpotent.cli"  # no import: no cycle
+    entry = getattr(main_run, "__module__", None) in ("nilpotent.entry", "nilpotent.cli")
     return time_budget(time_limit, already=process_age() if entry else 0.0)
 
 

@@ -469,6 +469,10 @@ def plan(
         systems of step ≥ 3 (their nilpotent convergence order ``1 + 1/r`` is
         slow, Newton's is quadratic) when the compiled integrator is used (a
         refinement step integrates ``P + 1`` trajectories), else 0.
+    time_limit : float
+        Seconds the whole plan may take (default: no limit); every step, the
+        integrations included, is bounded by it
+        (:func:`nilpotent.planning.budget.time_budget`).
 
     Raises
     ------

@@ -17,6 +17,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from nilpotent import interrupts
 from nilpotent.errors import OptionError
 from nilpotent.outputs import temporary_prefix
 
@@ -70,11 +71,14 @@ def move_into_place(tmp: Path, target: Path, existed: bool = True) -> None:
             "left untouched (run again, or choose another folder)"
         )
     check_target(target)  # again: what is there now must still be a previous reproduction
+    interrupts.checkpoint()  # an interrupt whose exception was swallowed: not in place
     if target.exists():
-        old = Path(tempfile.mkdtemp(prefix=temporary_prefix(target, "old"), dir=target.parent))
-        os.replace(target, old / target.name)
-        os.replace(tmp, target)
-        shutil.rmtree(old, ignore_errors=True)
+        with interrupts.deferred():  # Ctrl-C never leaves the target moved away
+            old = Path(tempfile.mkdtemp(prefix=temporary_prefix(target, "old"),
+                                        dir=target.parent))
+            os.replace(target, old / target.name)
+            os.replace(tmp, target)
+            shutil.rmtree(old, ignore_errors=True)
     else:
         os.replace(tmp, target)
 

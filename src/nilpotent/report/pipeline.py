@@ -53,6 +53,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import sympy as sp
 
+from nilpotent import interrupts
 from nilpotent.outputs import remove_stale_temporaries, temporary_prefix
 from nilpotent.progress import progress as report_progress
 from nilpotent.report.output import check_target, move_into_place, write_csv, write_json
@@ -228,15 +229,18 @@ def reproduce(
     existed = target.exists()
     remove_stale_temporaries(target)  # left by runs killed outright
     settings = QUICK if quick else FULL
-    tmp = Path(tempfile.mkdtemp(prefix=temporary_prefix(target), dir=target.parent))
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(tmp, 0o777 & ~mask)  # mkdtemp makes it private; the result is an ordinary folder
+    tmp: Path | None = None
     try:
+        with interrupts.deferred():  # created and known to the clean-up below as one step
+            tmp = Path(tempfile.mkdtemp(prefix=temporary_prefix(target), dir=target.parent))
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o777 & ~mask)  # mkdtemp makes it private; the result is ordinary
         result = _run(tmp, settings, quick, progress)
         move_into_place(tmp, target, existed)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
     return _relocate(result, tmp, target)
 
