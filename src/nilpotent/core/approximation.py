@@ -23,13 +23,14 @@ Bracket convention $[X,Y] = DY\cdot X - DX\cdot Y$.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass, replace
 
 import symengine as se
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.exponential_map import exponential_grading
+from nilpotent.core.exponential_map import check_budget, exponential_grading, series_budget
 from nilpotent.core.filtration import Filtration
 from nilpotent.core.privileged import (
     PrivilegedCoordinates,
@@ -337,9 +338,17 @@ def _se_symbols(names: Sequence[sp.Symbol]) -> list[se.Symbol]:
     return [to_symengine(s) for s in names]
 
 
-def _polys(fields: Sequence[Sequence[sp.Expr]], names: Sequence[sp.Symbol]) -> list[list[Poly]]:
+def _read(expr: se.Basic, variables: Sequence[se.Symbol], numeric: bool) -> Poly:
+    """A polynomial read from an expression; floats: their magnitudes tracked from here."""
+    poly = Poly.from_expr(expr, variables)
+    return poly.tracked() if numeric else poly
+
+
+def _polys(
+    fields: Sequence[Sequence[sp.Expr]], names: Sequence[sp.Symbol], numeric: bool = False
+) -> list[list[Poly]]:
     ys = _se_symbols(names)
-    return [[Poly.from_expr(to_symengine(c), ys) for c in f] for f in fields]
+    return [[_read(to_symengine(c), ys, numeric) for c in f] for f in fields]
 
 
 def _homogeneous(
@@ -420,6 +429,8 @@ def _bracket_levels(
         for X in hat:
             for b in current:
                 br = bracket(X, b)
+                if any(c.mags is not None for c in br):  # floats: drop what cancelled
+                    br = tuple(c.drop_zeros(zero) for c in br)
                 if ech.add(_field_vector(br)):
                     nxt.append(br)
         levels.append(nxt)
@@ -434,7 +445,8 @@ def _growth_at_zero(
     growth = []
     for level in levels:
         for f in level:
-            ech.add({j: c.value_at_zero() for j, c in enumerate(f) if c.value_at_zero() != 0})
+            origin = (0,) * n
+            ech.add({j: c.value_at_zero() for j, c in enumerate(f) if not c.is_zero_at(origin, zero)})
         growth.append(ech.rank)
     while len(growth) > 1 and growth[-1] == growth[-2]:
         growth.pop()
@@ -477,7 +489,9 @@ def _pushforward_ok(
     degrees = [wj if exact else wj - 1 for wj in w]
     top = max(degrees)
     ds = [se.Symbol(f"_nilpotent_d{k}") for k in range(n)]
-    shift = {x: d + to_symengine(p) for x, d, p in zip(ctx.xsyms, ds, ctx.p, strict=True)}
+    # fields_x is written in powers of x - p with the exact p (also in floating point)
+    point = approx.filtration.point
+    shift = {x: d + to_symengine(p) for x, d, p in zip(ctx.xsyms, ds, point, strict=True)}
     chi = list(coords.inverse_poly)
     d_of_y = [
         x - Poly.constant(n, to_symengine(p)) for x, p in zip(ctx.x_of(chi), ctx.p, strict=True)
@@ -498,7 +512,7 @@ def _pushforward_ok(
         jac.append(row)
     for fx, h in zip(approx.fields_x, hat, strict=True):
         comps = [
-            Poly.from_expr(to_symengine(c).xreplace(shift), ds).compose(d_of_y, w, top)
+            _read(to_symengine(c).xreplace(shift), ds, coords.numeric).compose(d_of_y, w, top)
             for c in fx
         ]
         for j in range(n):
@@ -524,8 +538,8 @@ def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -
     coords = approx.coordinates
     w = coords.weights
     r = approx.filtration.step
-    zero = ZeroTest()
-    hat = _polys(approx.fields, coords.names)
+    zero = ZeroTest(unit=1.0)  # the fields in y: frame units (taylor.ZeroTest)
+    hat = _polys(approx.fields, coords.names, coords.numeric)
     homogeneous = _homogeneous(approx.fields, coords.names, w)
     levels = _bracket_levels(hat, 2 * r + 2, zero)
     nonzero = [k for k, lev in enumerate(levels, start=1) if lev]
@@ -578,6 +592,7 @@ def _pushforward(
     ]
     out = []
     for h in hat:
+        check_budget(ctx)
         hz = [c.compose(fwd, omega, top) for c in h]
         vz = []
         for k in range(n):
@@ -658,9 +673,12 @@ def approximate(
             sys, point, method, numeric=numeric, max_length=max_length
         )
         bar.update(1, "approximation")
-        result = _approximation(sys, coords)
-        bar.update(2, "certificate")
-        cert = certify(result)
+        series = coords.method in ("exponential", "exponential-1") and not coords.numeric
+        ctx = _Context.of(coords.filtration, coords.numeric)
+        with series_budget(ctx) if series else nullcontext():
+            result = _approximation(sys, coords)
+            bar.update(2, "certificate")
+            cert = certify(result)
         bar.update(3)
     return replace(result, certificate=cert)
 

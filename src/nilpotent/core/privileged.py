@@ -60,6 +60,7 @@ Certificate
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 import symengine as se
@@ -67,13 +68,16 @@ import sympy as sp
 
 from nilpotent import typeset
 from nilpotent.core.exponential_map import (
+    check_budget,
     exponential_map,
     first_kind_map,
     from_exponential_map,
+    series_budget,
 )
 from nilpotent.core.expressions import as_expr
 from nilpotent.core.filtration import Filtration, analyze
 from nilpotent.core.orders import chain_order_homogeneous, low_order_terms
+from nilpotent.core.evaluation import double_inverse, exact_value
 from nilpotent.core.spans import to_double
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
@@ -257,8 +261,19 @@ class _Context:
         B = sp.Matrix(n, n, lambda j, k: filtration.frame_values[k][j])
         if numeric:
             self.p = tuple(_to_float(v) for v in filtration.point)
-            B = B.applyfunc(_to_float)
-            A = B.inv(method="LU")
+            # never an elimination on the rounded matrix (sympy's LU does not pivot on
+            # size): the inverse of the exact frame, enclosed in arb balls (pivoted, at
+            # rising precision) and rounded, with a scale-free residual check
+            exact = [[to_symengine(B[j, k]) for k in range(n)] for j in range(n)]
+            try:
+                inv = double_inverse(exact)
+            except ZeroDivisionError as exc:
+                raise ComputationLimitError(
+                    f"the frame matrix of {sys.name!r} at the point cannot be inverted in "
+                    f"floating point ({exc}); no floating-point privileged coordinates"
+                ) from exc
+            B = sp.Matrix(n, n, lambda j, k: _to_float(exact[j][k]))
+            A = sp.Matrix(n, n, lambda j, k: sp.Float(inv[j][k], 15) if inv[j][k] else sp.S(0))
         else:
             self.p = filtration.point
             A = B.inv()
@@ -267,7 +282,7 @@ class _Context:
         self.A = sp.ImmutableMatrix(A)
         self.Bse = [[to_symengine(B[j, k]) for k in range(n)] for j in range(n)]
         self.Ase = [[to_symengine(A[j, k]) for k in range(n)] for j in range(n)]
-        self.zero = ZeroTest()
+        self.zero = ZeroTest(unit=1.0)
 
     @staticmethod
     def of(filtration: Filtration, numeric: bool = False) -> _Context:
@@ -303,8 +318,10 @@ class _Context:
         return out
 
 
-def _to_float(value: sp.Expr) -> sp.Float:
-    """A 15-digit float of an exact value (from a certified ball, :func:`spans.to_double`)."""
+def _to_float(value: object) -> sp.Expr:
+    """A 15-digit float of an exact value (from a certified ball, :func:`spans.to_double`); 0 is 0."""
+    if value == 0:
+        return sp.S(0)
     return sp.Float(to_double(value), 15)
 
 
@@ -333,12 +350,16 @@ def _fields_in(
         for j, f in enumerate(forward_poly)
     )
     if not linear:
-        jac = [
-            [forward_poly[j].diff(l).compose(inverse_poly, weights, degrees[j]) for l in range(n)]
-            for j in range(n)
-        ]
+        jac = []
+        for j in range(n):
+            row = []
+            for l in range(n):
+                check_budget(ctx)
+                row.append(forward_poly[j].diff(l).compose(inverse_poly, weights, degrees[j]))
+            jac.append(row)
     out = []
     for i in range(len(ctx.fields)):
+        check_budget(ctx)
         xz = ctx.apply_A(jets[i * n : (i + 1) * n])
         if linear:
             comps = [xz[j].truncate(weights, degrees[j]) for j in range(n)]
@@ -382,7 +403,7 @@ def _chain_order(
                 h = lie_derivative(X, g, ones, max_order - s).drop_zeros(ctx.zero)
                 if h.terms:
                     nxt.setdefault(frozenset(h.terms.items()), h)
-        if any(not ctx.zero(h.value_at_zero()) for h in nxt.values()):
+        if any(not h.is_zero_at((0,) * n, ctx.zero) for h in nxt.values()):
             return s
         level = nxt
         if not level:
@@ -469,8 +490,11 @@ def _algebraic(ctx: _Context) -> Built:
                     {
                         a: c
                         for a, c in G.terms.items()
-                        if sum(a) == k and weighted_degree(a, w) < wj and not ctx.zero(c)
+                        if sum(a) == k
+                        and weighted_degree(a, w) < wj
+                        and not ctx.zero(c, G.magnitude(a))
                     },
+                    G.mags,
                 )
                 g = g - h
         forward.append(g)
@@ -522,6 +546,25 @@ def needs_floats(filtration: Filtration) -> bool:
     values = [v for f in filtration.frame_values for v in f]
     values += [e.xreplace(at) for f in filtration.system.specialized_fields for e in f]
     return any(v.atoms(sp.Function) or v.atoms(sp.Float) for v in values)
+
+
+_SERIES_METHODS = ("exponential", "exponential-1")
+"""Methods whose forward map is a series inverse: exact irrational coefficients swell there."""
+
+
+def _rational_values(filtration: Filtration) -> bool:
+    """Whether the point, the frame values and the fields' values at the point are rational.
+
+    At an exact point with irrational algebraic values (``sqrt(3)/2`` at
+    $\alpha = \pi/3$) the series inverse of the exponential methods carries
+    coefficients in a number field and runs for many minutes: there they work in
+    floating point (with the same certificate), as at a decimal point.
+    """
+    p = filtration.point
+    at = dict(zip(filtration.system.coordinates, p, strict=True))
+    values = list(p) + [v for f in filtration.frame_values for v in f]
+    values += [e.xreplace(at) for f in filtration.system.specialized_fields for e in f]
+    return all(exact_value(v) is not None for v in values)
 
 
 def coordinate_names(sys: ControlSystem) -> tuple[sp.Symbol, ...]:
@@ -633,7 +676,7 @@ def privileged_coordinates(
             "no privileged coordinates"
         )
     if numeric is None:
-        numeric = needs_floats(f)
+        numeric = needs_floats(f) or (method in _SERIES_METHODS and not _rational_values(f))
     ctx = _Context.of(f, numeric)
     if method == "auto":
         built = _linear(ctx)
@@ -645,8 +688,9 @@ def privileged_coordinates(
             orders, jets = _certified_orders(ctx, built[0], built[1])
     else:
         name = method
-        built = METHODS[method](ctx)
-        orders, jets = _certified_orders(ctx, built[0], built[1])
+        with series_budget(ctx) if method in ("exponential", "exponential-1") else nullcontext():
+            built = METHODS[method](ctx)
+            orders, jets = _certified_orders(ctx, built[0], built[1])
     assert orders is not None  # only quick=True returns None, and it was redone above
     bad = [(j, o, wj) for j, (o, wj) in enumerate(zip(orders, f.weights, strict=True)) if o != wj]
     names = coordinate_names(sys)
