@@ -11,10 +11,12 @@ expansion.
 $\hat X_i$ is pushed forward to the model coordinates with the Jacobian,
 $[\hat X_i]_x(x) = (\partial x/\partial y)(y(x))\,[\hat X_i]_y(y(x))$; for the
 ``linear`` and ``algebraic`` coordinates both maps are polynomial and exact,
-so ``fields_x`` is exact (polynomials in $x - p$).  For ``exponential``
-coordinates the forward map is a truncated series and so is ``fields_x``
-(terms of degree $> r$ in $z = A(x - p)$ dropped, $z_k$ counting its
-order: the dropped part is a vector field of order $\ge 1$).
+so ``fields_x`` is exact (polynomials in $x - p$).  For ``exponential`` and
+``exponential-1`` coordinates the forward map is a truncated series and so is
+``fields_x`` (terms of degree $> r$ in $z = A(x - p)$ dropped, $z_k$ counting
+its order: the dropped part is a vector field of order $\ge 1$): it differs
+from the formula above from degree 3 in $x - p$, and its pull-back to $y$
+still equals $\hat X$ up to the degrees checked by ``pushforward_ok``.
 
 The :class:`Certificate` is computed, never assumed (see :func:`certify`).
 Bracket convention $[X,Y] = DY\cdot X - DX\cdot Y$.
@@ -446,7 +448,9 @@ def _growth_at_zero(
     for level in levels:
         for f in level:
             origin = (0,) * n
-            ech.add({j: c.value_at_zero() for j, c in enumerate(f) if not c.is_zero_at(origin, zero)})
+            ech.add(
+                {j: c.value_at_zero() for j, c in enumerate(f) if not c.is_zero_at(origin, zero)}
+            )
         growth.append(ech.rank)
     while len(growth) > 1 and growth[-1] == growth[-2]:
         growth.pop()
@@ -549,7 +553,8 @@ def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -
     jets = coords.field_jets(extra=1)
     rem = _remainder_orders(jets, hat, w, zero)
     push = _pushforward_ok(approx, hat, zero)
-    ctx_zero = _Context.of(approx.filtration, approx.coordinates.numeric).zero
+    ctx = _Context.of(approx.filtration, approx.coordinates.numeric)
+    ctx_decisions = ctx.zero.numeric_decisions + ctx.zero_x.numeric_decisions
     orders = coordinate_orders(coords) if recompute_orders else coords.orders
     return Certificate(
         orders=tuple(orders),
@@ -564,7 +569,7 @@ def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -
         pushforward_ok=push,
         exact=approx.filtration.exact
         and zero.numeric_decisions == 0
-        and ctx_zero.numeric_decisions == 0,
+        and ctx_decisions == 0,
     )
 
 
@@ -609,7 +614,7 @@ def _pushforward(
                 if b != 0 and vz[l].terms:
                     acc = acc + vz[l].scale(b)
             vx.append(
-                acc.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts, keep_factors=ctx.numeric)
+                acc.compose(lin).drop_zeros(ctx.zero_x).to_sympy(shifts, keep_factors=ctx.numeric)
             )
         out.append(tuple(vx))
     return tuple(out), exact

@@ -38,9 +38,9 @@ __all__ = [
     "NotRational",
     "SymbolicEvaluator",
     "ball",
+    "double_inverse",
     "exact_decimals",
     "exact_value",
-    "double_inverse",
     "to_double",
 ]
 
@@ -454,8 +454,9 @@ def double_inverse(entries: list[list[object]], max_precision: int = 1024) -> li
     The matrix is enclosed in balls (:func:`ball`) and inverted with arb's
     Gaussian elimination with partial pivoting at rising precision, from
     :data:`START_PRECISION_BITS` up to ``max_precision`` bits, until every entry
-    of the inverse is known to $2^{-60}$ relative to the largest term of its row of $AB$; the result is
-    the midpoints (0 for a ball around 0, negligible there).  A residual check then requires
+    of the inverse is known to $2^{-60}$ relative to the largest term of its row
+    of $AB$; the result is the midpoints (0 for a ball around 0, negligible
+    there).  A residual check then requires
     $|(\tilde A \tilde B - I)_{jk}| \le 10^{-9}\,(|\tilde A|\,|\tilde B|)_{jk}$
     for the doubles $\tilde A$ and $\tilde B$ (scale-free: invariant under
     scaling the rows of $A$ and the columns of $B$), so that what the float

@@ -67,6 +67,7 @@ import symengine as se
 import sympy as sp
 
 from nilpotent import typeset
+from nilpotent.core.evaluation import double_inverse, exact_value
 from nilpotent.core.exponential_map import (
     check_budget,
     exponential_map,
@@ -77,7 +78,6 @@ from nilpotent.core.exponential_map import (
 from nilpotent.core.expressions import as_expr
 from nilpotent.core.filtration import Filtration, analyze
 from nilpotent.core.orders import chain_order_homogeneous, low_order_terms
-from nilpotent.core.evaluation import double_inverse, exact_value
 from nilpotent.core.spans import to_double
 from nilpotent.core.system import ControlSystem
 from nilpotent.core.taylor import (
@@ -282,7 +282,10 @@ class _Context:
         self.A = sp.ImmutableMatrix(A)
         self.Bse = [[to_symengine(B[j, k]) for k in range(n)] for j in range(n)]
         self.Ase = [[to_symengine(A[j, k]) for k in range(n)] for j in range(n)]
+        # floats in the adapted coordinates z, y (the frame is the unit there), and in the
+        # model coordinates x (no natural unit: relative to the tracked magnitudes only)
         self.zero = ZeroTest(unit=1.0)
+        self.zero_x = ZeroTest()
 
     @staticmethod
     def of(filtration: Filtration, numeric: bool = False) -> _Context:
@@ -319,7 +322,7 @@ class _Context:
 
 
 def _to_float(value: object) -> sp.Expr:
-    """A 15-digit float of an exact value (from a certified ball, :func:`spans.to_double`); 0 is 0."""
+    """A 15-digit float of an exact value (a certified ball, :func:`spans.to_double`); 0 is 0."""
     if value == 0:
         return sp.S(0)
     return sp.Float(to_double(value), 15)
@@ -551,14 +554,20 @@ def needs_floats(filtration: Filtration) -> bool:
 _SERIES_METHODS = ("exponential", "exponential-1")
 """Methods whose forward map is a series inverse: exact irrational coefficients swell there."""
 
+EXACT_TRIAL_BUDGET = 10.0
+"""Seconds the exponential methods try exact arithmetic at an exact point with irrational
+values (with ``numeric=None``) before they work in floating point instead."""
+
 
 def _rational_values(filtration: Filtration) -> bool:
-    """Whether the point, the frame values and the fields' values at the point are rational.
+    r"""Whether the point, the frame values and the fields' values at the point are rational.
 
     At an exact point with irrational algebraic values (``sqrt(3)/2`` at
-    $\alpha = \pi/3$) the series inverse of the exponential methods carries
-    coefficients in a number field and runs for many minutes: there they work in
-    floating point (with the same certificate), as at a decimal point.
+    $\alpha = \\pi/3$) the series inverse of the exponential methods carries
+    coefficients in a number field and can run for many minutes: there they work
+    in floating point (with the same certificate), as at a decimal point, at once
+    from step 3, after :data:`EXACT_TRIAL_BUDGET` seconds of exact arithmetic at
+    step 2.
     """
     p = filtration.point
     at = dict(zip(filtration.system.coordinates, p, strict=True))
@@ -585,7 +594,7 @@ def _to_sympy_in_x(ctx: _Context, polys: Sequence[Poly]) -> tuple[sp.Expr, ...]:
     point = ctx.filtration.point  # exact, also in float mode: y(p) = 0 exactly
     shifts = [c - p if p != 0 else c for c, p in zip(ctx.sys.coordinates, point, strict=True)]
     return tuple(
-        f.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts, keep_factors=ctx.numeric)
+        f.compose(lin).drop_zeros(ctx.zero_x).to_sympy(shifts, keep_factors=ctx.numeric)
         for f in polys
     )
 
@@ -616,8 +625,14 @@ def privileged_coordinates(
         (15 digits); ``None`` (default): exact unless the values of the fields
         or of the frame at $p$ involve transcendental function values
         (``cos(1/5)``) or floats, where exact arithmetic cannot simplify
-        ($\sin^2 + \cos^2$ is not recognised as 1) and expressions swell; the
-        result says which in ``numeric``.
+        ($\sin^2 + \cos^2$ is not recognised as 1) and expressions swell, and
+        for the exponential methods where exact arithmetic with irrational
+        values (``sqrt(3)/2``) would swell (at once from step 3, past
+        :data:`EXACT_TRIAL_BUDGET` seconds at step 2); the result says which in ``numeric``.  Floating point never inverts the
+        frame matrix by elimination on rounded numbers: $A$ is the inverse of the
+        exact $B$ enclosed in balls (pivoted, at rising precision) and rounded,
+        checked by a scale-free residual
+        (:func:`~nilpotent.core.evaluation.double_inverse`).
     max_length:
         Longest bracket length examined at $p$ (see
         :func:`~nilpotent.core.filtration.analyze`; default automatic, raised
@@ -676,7 +691,16 @@ def privileged_coordinates(
             "no privileged coordinates"
         )
     if numeric is None:
-        numeric = needs_floats(f) or (method in _SERIES_METHODS and not _rational_values(f))
+        numeric = needs_floats(f)
+        # exact irrational values (sqrt(3)/2): the series inverse may swell for minutes;
+        # exact arithmetic is tried for a short while, then floating point (below)
+        irrational = not numeric and method in _SERIES_METHODS and not _rational_values(f)
+        # step >= 3 swells past any budget (the kinematic snake at pi/3: > 600 s): floats
+        # at once; step 2 (the trident snake at 0, under a second) tries exact first
+        numeric = irrational and f.step >= 3
+        trial = irrational and not numeric
+    else:
+        trial = False
     ctx = _Context.of(f, numeric)
     if method == "auto":
         built = _linear(ctx)
@@ -688,9 +712,20 @@ def privileged_coordinates(
             orders, jets = _certified_orders(ctx, built[0], built[1])
     else:
         name = method
-        with series_budget(ctx) if method in ("exponential", "exponential-1") else nullcontext():
-            built = METHODS[method](ctx)
-            orders, jets = _certified_orders(ctx, built[0], built[1])
+        try:
+            with series_budget(ctx, EXACT_TRIAL_BUDGET if trial else None) if (
+                method in _SERIES_METHODS
+            ) else nullcontext():
+                built = METHODS[method](ctx)
+                orders, jets = _certified_orders(ctx, built[0], built[1])
+        except ComputationLimitError:
+            if not trial:
+                raise
+            numeric = True
+            ctx = _Context.of(f, numeric)
+            with series_budget(ctx):
+                built = METHODS[method](ctx)
+                orders, jets = _certified_orders(ctx, built[0], built[1])
     assert orders is not None  # only quick=True returns None, and it was redone above
     bad = [(j, o, wj) for j, (o, wj) in enumerate(zip(orders, f.weights, strict=True)) if o != wj]
     names = coordinate_names(sys)
@@ -711,7 +746,7 @@ def privileged_coordinates(
         filtration=f,
         names=names,
         forward=_to_sympy_in_x(ctx, forward_poly),
-        inverse=tuple(e.drop_zeros(ctx.zero).to_sympy(names) for e in x_of_y),
+        inverse=tuple(e.drop_zeros(ctx.zero_x).to_sympy(names) for e in x_of_y),
         inverse_exact=inv_exact,
         inverse_order=inv_order,
         orders=tuple(int(o) for o in orders),

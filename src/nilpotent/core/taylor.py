@@ -74,7 +74,7 @@ def _clean(c: se.Basic) -> se.Basic:
 
 
 class ZeroTest:
-    """Decide whether an exact coefficient is zero.
+    r"""Decide whether an exact coefficient is zero.
 
     Structural first (symengine's canonical form after expansion); where that
     leaves a constant that is not a number, :func:`nilpotent.core.spans.is_zero`
@@ -413,7 +413,6 @@ class Poly:
             return self
         nv = args[0].nvars
         powers: list[list[Poly]] = [[Poly.constant(nv, 1)] for _ in args]
-        out = Poly(nv)
         acc: dict[Monomial, se.Basic] = {}
         tracked = self.mags is not None or any(a.mags is not None for a in args)
         mags: dict[Monomial, float] = {}
