@@ -628,8 +628,8 @@ def privileged_coordinates(
         ($\sin^2 + \cos^2$ is not recognised as 1) and expressions swell, and
         for the exponential methods where exact arithmetic with irrational
         values (``sqrt(3)/2``) would swell (at once from step 3, past
-        :data:`EXACT_TRIAL_BUDGET` seconds at step 2); the result says which in ``numeric``.  Floating point never inverts the
-        frame matrix by elimination on rounded numbers: $A$ is the inverse of the
+        :data:`EXACT_TRIAL_BUDGET` seconds at step 2); the result says which
+        in ``numeric``.  Floating point never inverts the frame matrix by elimination on rounded numbers: $A$ is the inverse of the
         exact $B$ enclosed in balls (pivoted, at rising precision) and rounded,
         checked by a scale-free residual
         (:func:`~nilpotent.core.evaluation.double_inverse`).
