@@ -629,10 +629,10 @@ def privileged_coordinates(
         for the exponential methods where exact arithmetic with irrational
         values (``sqrt(3)/2``) would swell (at once from step 3, past
         :data:`EXACT_TRIAL_BUDGET` seconds at step 2); the result says which
-        in ``numeric``.  Floating point never inverts the frame matrix by elimination on rounded numbers: $A$ is the inverse of the
-        exact $B$ enclosed in balls (pivoted, at rising precision) and rounded,
-        checked by a scale-free residual
-        (:func:`~nilpotent.core.evaluation.double_inverse`).
+        in ``numeric``.  Floating point never inverts the frame matrix by
+        elimination on rounded numbers: $A$ is the inverse of the exact $B$
+        enclosed in balls (pivoted, at rising precision) and rounded, checked
+        by a scale-free residual (:func:`~nilpotent.core.evaluation.double_inverse`).
     max_length:
         Longest bracket length examined at $p$ (see
         :func:`~nilpotent.core.filtration.analyze`; default automatic, raised
