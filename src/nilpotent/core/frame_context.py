@@ -133,14 +133,17 @@ _SERIES_METHODS = ("exponential", "exponential-1")
 
 EXACT_TRIAL_BUDGET = 10.0
 """Seconds the exponential methods try exact arithmetic at an exact point with irrational
-values (with ``numeric=None``) before they work in floating point instead."""
+values (with ``numeric=None``) before they work in floating point instead (CPU seconds)."""
 
 
 def _rational_values(filtration: Filtration) -> bool:
-    r"""Whether the point, the frame values and the fields' values at the point are rational.
+    r"""Whether the frame values and the fields' values at the point are rational.
+
+    The point itself may be irrational (``theta = pi/2``: ``cos`` and ``sin`` of it
+    are rational).
 
     At an exact point with irrational algebraic values (``sqrt(3)/2`` at
-    $\alpha = \\pi/3$) the series inverse of the exponential methods carries
+    $\alpha = \pi/3$) the series inverse of the exponential methods carries
     coefficients in a number field and can run for many minutes: there they work
     in floating point (with the same certificate), as at a decimal point, at once
     from step 3, after :data:`EXACT_TRIAL_BUDGET` seconds of exact arithmetic at
@@ -148,6 +151,6 @@ def _rational_values(filtration: Filtration) -> bool:
     """
     p = filtration.point
     at = dict(zip(filtration.system.coordinates, p, strict=True))
-    values = list(p) + [v for f in filtration.frame_values for v in f]
+    values = [v for f in filtration.frame_values for v in f]
     values += [e.xreplace(at) for f in filtration.system.specialized_fields for e in f]
     return all(exact_value(v) is not None for v in values)
