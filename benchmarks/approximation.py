@@ -1,4 +1,4 @@
-"""Benchmark of `nilpotent.core.approximation.approximate` against a plain sympy route.
+"""Benchmark of `nilpotent.core.coordinates.approximation.approximate` against a plain sympy route.
 
 Cases (all at the origin): ``trident-snake`` (body-velocity form),
 ``trident-snake-paper`` (the paper's eq. (vf)), ``engel``, ``cartan``, and
@@ -38,7 +38,7 @@ which assert no timings.
 
 Usage: ``PYTHONPATH=src python benchmarks/approximation.py [--max-k 8]
 [--timeout 60] [--markdown] [--expansion-budget N]``
-(``--expansion-budget`` sets :data:`nilpotent.core.brackets.EXPANSION_TERMS_BUDGET`,
+(``--expansion-budget`` sets :data:`nilpotent.core.lie.brackets.EXPANSION_TERMS_BUDGET`,
 the bound on the size of an expanded bracket field, for this run).
 """
 
@@ -52,11 +52,11 @@ from dataclasses import dataclass, replace
 
 import sympy as sp
 
-import nilpotent.core.brackets as brackets
-from nilpotent.core.approximation import NilpotentApproximation, _approximation, certify
-from nilpotent.core.filtration import analyze
-from nilpotent.core.privileged import privileged_coordinates
-from nilpotent.core.system import ControlSystem
+import nilpotent.core.lie.brackets as brackets
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.coordinates.approximation import NilpotentApproximation, _approximation, certify
+from nilpotent.core.coordinates.privileged import privileged_coordinates
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError
 from nilpotent.models import get_model
 
@@ -193,7 +193,7 @@ def main() -> None:
         "--expansion-budget",
         type=int,
         default=None,
-        help="nilpotent.core.brackets.EXPANSION_TERMS_BUDGET for this run",
+        help="nilpotent.core.lie.brackets.EXPANSION_TERMS_BUDGET for this run",
     )
     args = parser.parse_args()
     if args.expansion_budget is not None:

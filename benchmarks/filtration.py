@@ -1,4 +1,4 @@
-"""Benchmark of `nilpotent.core.filtration.analyze` against plain sympy brackets.
+"""Benchmark of `nilpotent.core.analysis.filtration.analyze` against plain sympy brackets.
 
 Cases: ``car-trailers:K`` at the origin (regular, step K + 2) for K = 1..K_max
 (default 9), and at the configuration where every trailer is perpendicular to the
@@ -28,9 +28,9 @@ import time
 
 import sympy as sp
 
-from nilpotent.core.brackets import hall_basis, word_length
-from nilpotent.core.filtration import analyze
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.lie.brackets import hall_basis, word_length
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.models import get_model
 
 

@@ -45,8 +45,8 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
 
     from nilpotent.models import get_model
+    from nilpotent.simulation import sweep
     from nilpotent.simulation.executors import loopback_cluster
-    from nilpotent.sweep import sweep
 
     load = os.getloadavg()
     print(f"machine: {os.cpu_count()} CPUs, load average {load[0]:.2f} {load[1]:.2f} "

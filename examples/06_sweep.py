@@ -13,7 +13,7 @@ import tempfile
 from pathlib import Path
 
 from nilpotent import amplitude_range, get_model
-from nilpotent.sweep import sweep
+from nilpotent.simulation import sweep
 
 
 def main() -> None:

@@ -3,10 +3,11 @@
 ``@pytest.mark.every_model`` runs a test once per entry of the model registry
 (:data:`nilpotent.models.MODELS`, each built from its ``example_spec``: the
 joint-form trident included, ``car-trailers:1`` for the family); the test takes
-the built :class:`~nilpotent.core.system.ControlSystem` as its ``model``
+the built :class:`~nilpotent.core.model.system.ControlSystem` as its ``model``
 argument.  ``@pytest.mark.every_model(slow=("trident-snake-joints",))`` marks
 the runs on the named models slow.  A new built-in model is therefore checked by every such property
-without editing any test.
+without editing any test.  Tests that work at a point use :func:`model_point`: the origin, or the
+registry's ``example_at`` for a model undefined there (``kinematic-snake``).
 """
 
 from __future__ import annotations
@@ -31,6 +32,13 @@ def every_model_spec() -> list[str]:
     from nilpotent.models import MODELS
 
     return [info.example_spec for info in MODELS.values()]
+
+
+def model_point(model) -> tuple:
+    """The registry's example point of the built-in ``model`` (the origin unless ``example_at``)."""
+    from nilpotent.models import MODELS
+
+    return MODELS[model.name.partition(":")[0]].example_point(model)
 
 
 def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:

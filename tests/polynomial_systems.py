@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import sympy as sp
 from hypothesis import strategies as st
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.models import get_model
 
 

@@ -12,10 +12,11 @@ import symengine as se
 import sympy as sp
 from hypothesis import HealthCheck, given, settings
 
-from nilpotent.core.approximation import approximate, certify
-from nilpotent.core.filtration import analyze
-from nilpotent.core.privileged import METHODS
-from nilpotent.core.system import ControlSystem
+from conftest import model_point
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.coordinates.approximation import approximate, certify
+from nilpotent.core.coordinates.privileged import METHODS
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NotPrivilegedError, OptionError
 from nilpotent.models import get_model
 from polynomial_systems import (
@@ -59,7 +60,7 @@ def independent_checks(sys: ControlSystem, a) -> None:
 @pytest.mark.every_model
 def test_certificate_and_independent_checks(model, method):
     sys = model
-    a = approximate(sys, None, method)
+    a = approximate(sys, model_point(model), method)
     assert a.certificate.ok, a.certificate.failures()
     assert a.certificate.nilpotent_step == a.filtration.step
     independent_checks(sys, a)

@@ -25,7 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("core",),
     ("numeric",),
     ("models",),
-    ("simulate", "sweep", "simulation"),
+    ("simulation",),
     ("planning",),
     ("viz",),
     ("report",),
@@ -160,3 +160,144 @@ def test_the_checker_sees_an_upward_import(tmp_path: Path):
     module = tmp_path / "m.py"
     module.write_text("def f():\n    from nilpotent.viz import save_figure\n    return 1\n")
     assert ("viz", 2) in _imported_units(module)
+
+
+# --- the import graph at module granularity ----------------------------------------------
+
+#: The rooms of ``nilpotent.core`` in the order the mathematics runs: a module of one
+#: room imports only its own room and the rooms before it (``nilpotent/core/__init__.py``).
+CORE_ROOMS = ("model", "decide", "lie", "analysis", "coordinates")
+
+
+def _module_name(path: Path, package: Path = PACKAGE) -> str:
+    rel = path.relative_to(package.parent).with_suffix("")
+    return ".".join(rel.parts).removesuffix(".__init__")
+
+
+def _type_checking_nodes(tree: ast.AST) -> set[int]:
+    """``id`` of every node under an ``if TYPE_CHECKING:`` (type-only imports)."""
+    out: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and ast.unparse(node.test) in (
+                "TYPE_CHECKING", "typing.TYPE_CHECKING"):
+            for stmt in node.body:
+                out.update(id(n) for n in ast.walk(stmt))
+    return out
+
+
+def _import_graph(package: Path = PACKAGE) -> tuple[dict[str, set[str]], list[str]]:
+    """Module -> the ``nilpotent`` modules it imports at run time (lazy imports included,
+    type-only ones not), and every private name one module takes from another.
+
+    ``from a.b import c`` is an edge to ``a.b.c`` when that is a module, else to ``a.b``.
+    """
+    paths = {_module_name(p, package): p for p in sorted(package.rglob("*.py"))}
+    graph: dict[str, set[str]] = {}
+    private: list[str] = []
+    for name, path in paths.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        type_only = _type_checking_nodes(tree)
+        own_package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        edges: set[str] = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    parts = own_package.split(".")[: len(own_package.split(".")) - node.level + 1]
+                    base = ".".join([*parts, *([node.module] if node.module else [])])
+                if base.split(".")[0] != "nilpotent":
+                    continue
+                for alias in node.names:
+                    if alias.name.startswith("_") and not alias.name.startswith("__"):
+                        private.append(f"{name} line {node.lineno}: {alias.name} from {base}")
+                    target = f"{base}.{alias.name}"
+                    target = target if target in paths else base
+                    if id(node) not in type_only and target != name:
+                        edges.add(target)
+            elif isinstance(node, ast.Import) and id(node) not in type_only:
+                edges.update(a.name for a in node.names
+                             if a.name.split(".")[0] == "nilpotent" and a.name != name)
+        graph[name] = {e for e in edges if e in paths}
+    return graph, private
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def test_no_import_cycle_between_modules():
+    """No module reaches itself through run-time imports (lazy ones count; type-only do not)."""
+    graph, _ = _import_graph()
+    assert _cycles(graph) == [], "import cycles (break them: move the shared piece down)"
+
+
+def test_no_private_name_is_imported_across_modules():
+    """A name starting with ``_`` stays in its module (type-only imports included)."""
+    _, private = _import_graph()
+    assert private == [], "make the name public where it is shared, or move it where it belongs"
+
+
+def test_core_rooms_import_only_the_rooms_before_them():
+    graph, _ = _import_graph()
+    rooms = {r: k for k, r in enumerate(CORE_ROOMS)}
+    core = {p.name for p in (PACKAGE / "core").iterdir() if p.is_dir() and p.name != "__pycache__"}
+    assert core == set(CORE_ROOMS), "place new rooms of core in CORE_ROOMS"
+    loose = sorted(p.name for p in (PACKAGE / "core").glob("*.py") if p.name != "__init__.py")
+    assert loose == [], "every module of core lives in a room (tools/core_moves.txt)"
+    upward = []
+    for module, targets in graph.items():
+        parts = module.split(".")
+        if parts[:2] != ["nilpotent", "core"] or len(parts) < 3:
+            continue
+        for target in targets:
+            tparts = target.split(".")
+            if tparts[:2] == ["nilpotent", "core"] and len(tparts) > 2 and (
+                    rooms[tparts[2]] > rooms[parts[2]]):
+                upward.append(f"{module} imports {target}")
+    assert upward == []
+
+
+def test_the_graph_checks_see_a_cycle_and_a_private_import(tmp_path: Path):
+    """The checks are not vacuous: a planted lazy cycle and a private import are found."""
+    pkg = tmp_path / "nilpotent"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("from nilpotent.b import _g\n")
+    (pkg / "b.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from nilpotent.c import C\n"
+        "def _g():\n    from nilpotent import a\n    return a\n")
+    (pkg / "c.py").write_text("from nilpotent.b import _g as g\n")
+    graph, private = _import_graph(pkg)
+    assert _cycles(graph) == [["nilpotent.a", "nilpotent.b"]]  # b -> c is type-only
+    assert len(private) == 2

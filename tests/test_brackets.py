@@ -9,7 +9,7 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.brackets import (
+from nilpotent.core.lie.brackets import (
     bracket,
     format_word,
     hall_basis,
@@ -19,7 +19,7 @@ from nilpotent.core.brackets import (
     word_length,
     word_values_at,
 )
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 
 X = sp.symbols("x1 x2 x3")

@@ -13,10 +13,10 @@ from pathlib import Path
 import pytest
 import sympy as sp
 
-from nilpotent.core.approximation import approximate
-from nilpotent.core.filtration import analyze
-from nilpotent.core.points import parse_point
-from nilpotent.core.singular import singular_set
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.analysis.singular import singular_set
+from nilpotent.core.coordinates.approximation import approximate
+from nilpotent.core.model.points import parse_point
 from nilpotent.models import load_system
 
 CASES = Path(__file__).parent / "data" / "cases"
@@ -205,7 +205,7 @@ def test_trident_tiny_and_huge_leg_length(run_cli, value):
 
 
 def test_hostile_expansions_and_searches_end_within_a_budget(run_cli):
-    from nilpotent.core.system import ControlSystem
+    from nilpotent.core.model.system import ControlSystem
     from nilpotent.errors import ComputationLimitError
 
     status, out, _ = run_cli("analyze", str(CASES / "multinomial4.toml"), "--json")
@@ -242,7 +242,10 @@ def test_singular_locus_of_a_huge_determinant_is_refused_not_simplified_for_minu
     """car-trailers:4's frame determinant expands to millions of characters: the
     trigonometric normal form is refused with the budget named, and the search for an
     invariant hypersurface at a point concludes nothing instead of hanging."""
-    from nilpotent.core.singular import SINGULAR_DETERMINANT_MAX_CHARS, invariant_hypersurface
+    from nilpotent.core.analysis.singular import (
+        SINGULAR_DETERMINANT_MAX_CHARS,
+        invariant_hypersurface,
+    )
     from nilpotent.errors import ComputationLimitError
     from nilpotent.models import get_model
 

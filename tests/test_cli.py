@@ -11,7 +11,7 @@ import textwrap
 import pytest
 import sympy as sp
 
-from nilpotent.core.expressions import parse_expression
+from nilpotent.core.model.expressions import parse_expression
 
 
 def _exact(text: str) -> sp.Expr:
@@ -154,7 +154,7 @@ def test_console_script_runs(tmp_path):
 
 def test_core_does_not_import_numeric_stack():
     code = (
-        "import sys, nilpotent.core.filtration, nilpotent.core.approximation;"
+        "import sys, nilpotent.core.analysis.filtration, nilpotent.core.coordinates.approximation;"
         "bad = [m for m in ('matplotlib', 'scipy') if m in sys.modules];"
         "print(','.join(bad))"
     )

@@ -6,9 +6,113 @@ The parameters of public functions are checked by ``tests/test_public_api.py``."
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+# --- the site stands alone -------------------------------------------------------------
+
+#: What a page must not name: the project's design notes and a developer's folders are not
+#: part of the repository or of the site (their content is on mathematics.md and
+#: interface.md).
+_OUTSIDE = ("../shared", "/work/", "/home/", "/Users/", "MATH.md", "INTERFACE.md")
+
+#: An inline markdown link ``[text](target)`` (reference-style ``[text][id]`` links are
+#: autorefs of the API and checked by the strict site build).
+_LINK = re.compile(r"\[[^\]\n]*\]\((?P<target>[^)\s]+)\)")
+
+
+def _doc_sources() -> list[Path]:
+    """The pages of the site and the README (``docs/hooks`` is code that rewrites the
+    docstrings' mentions of the design notes, so it names them on purpose)."""
+    pages = [p for p in (ROOT / "docs").rglob("*") if p.suffix in (".md", ".ipynb")]
+    return [*sorted(pages), ROOT / "README.md"]
+
+
+_CODE_OR_MATH = re.compile(
+    r"^(?P<f>```|~~~).*?^(?P=f)|`[^`\n]*`|\$\$.*?\$\$|\$[^$\n]*\$", re.DOTALL | re.MULTILINE
+)
+
+
+def _prose(path: Path) -> str:
+    """The text of a page where links can be: no code, no formulas (``[X, Y](p)`` is
+    mathematics); of a notebook, its markdown cells."""
+    text = path.read_text(encoding="utf-8")
+    if path.suffix == ".ipynb":
+        cells = json.loads(text)["cells"]
+        text = "\n\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "markdown")
+    return _CODE_OR_MATH.sub(" ", text)
+
+
+def _generated_pages() -> set[str]:
+    """The pages ``docs/hooks/generated_pages.py`` adds when the site is built."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "generated_pages", ROOT / "docs" / "hooks" / "generated_pages.py"
+    )
+    assert spec and spec.loader
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    api = {f"api/{key}.md" for key, *_ in hook.API_TOPICS} | {"api/index.md"}
+    return {"cli.md", "tutorial-notebook.md", *api}
+
+
+def test_docs_and_readme_name_nothing_outside_the_repository():
+    found = [
+        f"{path.relative_to(ROOT)}:{n}: {needle}"
+        for path in _doc_sources()
+        for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        for needle in _OUTSIDE
+        if needle in line
+    ]
+    assert found == []
+
+
+def test_every_relative_link_of_the_docs_and_readme_resolves():
+    docs = ROOT / "docs"
+    generated = _generated_pages()
+    broken = []
+    checked = 0
+    for path in _doc_sources():
+        for m in _LINK.finditer(_prose(path)):
+            target = m.group("target").split("#", 1)[0]
+            if not target or "://" in target or target.startswith("mailto:"):
+                continue
+            checked += 1
+            resolved = (path.parent / target).resolve()
+            ok = resolved.exists()
+            if not ok and resolved.is_relative_to(docs):
+                ok = resolved.relative_to(docs).as_posix() in generated
+            if not ok:
+                broken.append(f"{path.relative_to(ROOT)}: {m.group(0)}")
+    assert broken == []
+    assert checked > 50  # the pages do link to one another
+
+
+def test_the_link_checker_sees_a_broken_link(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("[there](missing.md) [ok](page.md) [web](https://example.org)")
+    targets = [m.group("target") for m in _LINK.finditer(page.read_text())]
+    assert targets == ["missing.md", "page.md", "https://example.org"]
+    assert not (tmp_path / "missing.md").exists() and (tmp_path / "page.md").exists()
+
+
+def test_mentions_of_other_pages_are_links_not_file_names():
+    """``docs/tutorial.md`` written as code is a dead end in a browser: a page names
+    another page with a link."""
+    name = re.compile(r"`(?:docs/)?[\w-]+\.(?:md|ipynb)`")
+    found = [
+        f"{path.relative_to(ROOT)}:{n}: {m.group(0)}"
+        for path in _doc_sources()
+        if path.suffix == ".md"
+        for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        for m in name.finditer(line)
+        if not m.group(0).startswith("`benchmarks/")
+    ]
+    assert found == []
 
 
 def test_tutorial_notebook_is_stored_without_outputs():
@@ -24,7 +128,6 @@ def test_tutorial_notebook_is_stored_without_outputs():
 import ast  # noqa: E402
 import dataclasses  # noqa: E402
 import inspect  # noqa: E402
-import re  # noqa: E402
 import textwrap  # noqa: E402
 
 import pytest  # noqa: E402

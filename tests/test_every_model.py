@@ -19,7 +19,8 @@ import pytest
 import sympy as sp
 
 import nilpotent as nil
-from nilpotent.core.modelfile import dump_model_file
+from conftest import model_point
+from nilpotent.core.model.modelfile import dump_model_file
 from nilpotent.models import MODELS
 
 pytestmark = pytest.mark.every_model
@@ -60,9 +61,10 @@ def _plain_bracket(x, y, coords) -> list:
 
 
 def _plain_growth_vector(model) -> tuple[int, ...]:
-    """Ranks at the origin of the right-normed brackets up to each length (exact sympy)."""
+    """Ranks at the example point (:func:`conftest.model_point`, mostly the origin) of the
+    right-normed brackets up to each length (exact sympy)."""
     coords, fields = model.coordinates, [list(f) for f in model.specialized_fields]
-    origin = dict.fromkeys(coords, sp.Integer(0))
+    origin = dict(zip(coords, model_point(model), strict=True))
     layer, values, growth = fields, [], []
     while len(growth) < 2 * model.n:
         values += [[sp.nsimplify(sp.simplify(e.xreplace(origin))) for e in v] for v in layer]
@@ -73,7 +75,8 @@ def _plain_growth_vector(model) -> tuple[int, ...]:
     return tuple(growth)
 
 
-@pytest.mark.every_model(slow=("trident-snake-joints",))  # length-3 brackets: 3.7M operations
+# length-3 brackets: trident joints 3.7M operations, the snake 11 s
+@pytest.mark.every_model(slow=("trident-snake-joints", "kinematic-snake"))
 def test_brackets_match_plain_sympy_and_satisfy_jacobi(model) -> None:
     coords, f = model.coordinates, model.specialized_fields
     point = _random_point(model)
@@ -89,7 +92,7 @@ def test_brackets_match_plain_sympy_and_satisfy_jacobi(model) -> None:
 
 
 def test_growth_vector_and_weights_match_plain_sympy(model) -> None:
-    filtration = nil.analyze(model)
+    filtration = nil.analyze(model, model_point(model))
     expected = _plain_growth_vector(model)
     assert filtration.growth_vector == expected
     assert filtration.bracket_generating and expected[-1] == model.n
@@ -113,12 +116,14 @@ def test_model_file_round_trip(model, tmp_path) -> None:
 
 def test_bracket_loop_moves_the_state_by_pi_a_squared_times_the_bracket(model) -> None:
     """``u1 = −Aω sin ωt, u2 = Aω cos ωt``: ``Δx = πA²[X1, X2](0) + O(A³)`` (the convention)."""
-    origin = dict.fromkeys(model.coordinates, sp.Integer(0))
+    origin = dict(zip(model.coordinates, model_point(model), strict=True))
     f = model.specialized_fields
     expected = _at(_plain_bracket(f[0], f[1], model.coordinates), origin)
     errors = []
     for amp in (0.04, 0.02):
-        run = nil.compare_bracket_motion(model, (1, 2), amp, samples=3)
+        run = nil.compare_bracket_motion(
+            model, (1, 2), amp, samples=3, point=model_point(model)
+        )
         moved = np.asarray(run.original[-1]) - np.asarray(run.original[0])
         errors.append(np.max(np.abs(moved / (math.pi * amp**2) - expected)))
     # the remainder is O(A): halving A at least roughly halves it (or it is round-off)

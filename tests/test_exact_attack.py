@@ -69,8 +69,8 @@ def test_complex_field_value_is_refused(tmp_path, field):
 def test_undetermined_at_random_points_is_no_rank_deficit(monkeypatch):
     # Heisenberg is bracket generating (2, 3).  If no decision at the random points can be made
     # for [X1, X2], the analysis must not report growth (2) / "not bracket generating".
-    from nilpotent.core import filtration
-    from nilpotent.core.spans import Decision, Span
+    from nilpotent.core.analysis import filtration
+    from nilpotent.core.decide.spans import Decision, Span
     from nilpotent.errors import PointError
     from nilpotent.models import get_model
 

@@ -14,19 +14,19 @@ import symengine as se
 import sympy as sp
 from hypothesis import HealthCheck, given, settings
 
-import nilpotent.core.brackets as brackets
-from nilpotent.core.brackets import word_field_symengine
-from nilpotent.core.exponential_map import (
+import nilpotent.core.lie.brackets as brackets
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.coordinates.exponential_map import (
     exponential_map,
     first_kind_map,
     frame_field,
     frame_jets_along,
     integrate,
 )
-from nilpotent.core.filtration import analyze
-from nilpotent.core.privileged import _Context, privileged_coordinates
-from nilpotent.core.system import ControlSystem
-from nilpotent.core.taylor import Poly, to_symengine, weighted_degree, weighted_jets
+from nilpotent.core.coordinates.jets import Poly, to_symengine, weighted_degree, weighted_jets
+from nilpotent.core.coordinates.privileged import FrameContext, privileged_coordinates
+from nilpotent.core.lie.brackets import word_field_symengine
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.models import get_model
 
 CASES = {
@@ -41,23 +41,23 @@ def fresh(name: str) -> ControlSystem:
     return ControlSystem(s.name, s.coordinates, s.fields, (), s.description)
 
 
-def context(case: str) -> _Context:
+def context(case: str) -> FrameContext:
     name = case.split(" ")[0]
     sys = fresh(name)
     at = CASES[case]
     point = None
     if at:
         point = [at.get(str(c), 0) for c in sys.coordinates]
-    return _Context(analyze(sys, point), numeric=False)
+    return FrameContext(analyze(sys, point), numeric=False)
 
 
-def direct_jets(ctx: _Context, l: int, cur, degree: int) -> list[Poly]:
+def direct_jets(ctx: FrameContext, l: int, cur, degree: int) -> list[Poly]:
     """The second method: one series of the expanded field along ``cur``."""
     Y = word_field_symengine(ctx.sys, ctx.filtration.frame[l])
     return weighted_jets(Y, ctx.xsyms, cur, ctx.weights, degree)
 
 
-def direct_exponential_map(ctx: _Context, degree: int) -> list[Poly]:
+def direct_exponential_map(ctx: FrameContext, degree: int) -> list[Poly]:
     """E(s) by Picard iteration with the direct jets (the construction before issue 13)."""
     w = ctx.weights
     E = [Poly.constant(ctx.n, to_symengine(v)) for v in ctx.p]
@@ -72,7 +72,7 @@ def direct_exponential_map(ctx: _Context, degree: int) -> list[Poly]:
     return E
 
 
-def direct_first_kind_map(ctx: _Context, degree: int) -> list[Poly]:
+def direct_first_kind_map(ctx: FrameContext, degree: int) -> list[Poly]:
     """E_1(y) by Picard iteration in (y, tau) with one series of all frame fields per iterate."""
     n, w = ctx.n, ctx.weights
     nv, wt = n + 1, [*w, 0]
@@ -107,7 +107,7 @@ def same(a: list[Poly], b: list[Poly]) -> bool:
 
 
 @st.composite
-def polynomial_maps(draw, ctx: _Context, degree: int):
+def polynomial_maps(draw, ctx: FrameContext, degree: int):
     """x = p + a random polynomial in s without constant term, weighted degree <= degree."""
     n, w = ctx.n, ctx.weights
     monos = [m for m in _monomials(n, w, degree) if any(m)]
@@ -172,7 +172,7 @@ def test_frame_fields_past_the_expansion_budget_give_the_same_coordinates(monkey
     monkeypatch.setattr(brackets, "EXPANSION_TERMS_BUDGET", 3)
     with pytest.raises(brackets.ComputationLimitError):
         word_field_symengine(sys, f.frame[-1])
-    ctx = _Context(f, numeric=False)
+    ctx = FrameContext(f, numeric=False)
     assert not isinstance(frame_field(ctx, f.frame[-1])[4], se.Integer)
     coords = privileged_coordinates(sys, method="algebraic", filtration=f)
     assert coords.forward == reference.forward and coords.inverse == reference.inverse

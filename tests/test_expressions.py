@@ -9,7 +9,7 @@ import sympy as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.expressions import (
+from nilpotent.core.model.expressions import (
     FUNCTIONS,
     MAX_DEPTH,
     MAX_LENGTH,
@@ -386,8 +386,8 @@ _NAMES = {"x": _X, "y": _Y, "z": _Z}
     keep=st.booleans(),
 )
 def test_linear_time_printer_parses_back_to_an_equal_expression(coeffs, exps, keep):
-    from nilpotent.core.expressions import _PRINTABLE_FUNCTIONS
-    from nilpotent.core.linear_printer import print_linear
+    from nilpotent.core.model.expressions import _PRINTABLE_FUNCTIONS
+    from nilpotent.core.model.linear_printer import print_linear
 
     terms = []
     shifted = (_X - sp.Rational(1, 3), _Y + sp.pi, sp.cos(_Z) + 2)
@@ -404,7 +404,7 @@ def test_linear_time_printer_parses_back_to_an_equal_expression(coeffs, exps, ke
 
 
 def test_large_expressions_are_printed_by_the_linear_printer(monkeypatch):
-    import nilpotent.core.expressions as ex
+    import nilpotent.core.model.expressions as ex
 
     big = sp.expand((_X + 2 * _Y - sp.Rational(1, 3) * _Z + 1) ** 9)
     text = format_expression(big)

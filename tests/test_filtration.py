@@ -7,9 +7,9 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.brackets import word_length
-from nilpotent.core.filtration import analyze, singular_locus
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.analysis.filtration import analyze, singular_locus
+from nilpotent.core.lie.brackets import word_length
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError, NotBracketGeneratingError, PointError
 from nilpotent.models import get_model
 

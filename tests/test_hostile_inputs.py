@@ -41,7 +41,7 @@ def test_numbers_past_the_4300_digit_limit_are_clear_errors(run_cli, name):
 
 
 def test_an_exact_number_too_long_to_print_is_a_limit_not_a_traceback():
-    from nilpotent.core.expressions import format_expression
+    from nilpotent.core.model.expressions import format_expression
 
     with pytest.raises(ComputationLimitError):
         format_expression(sp.Integer(7) ** 6000)
@@ -80,7 +80,7 @@ def test_unwritable_outputs_are_refused_before_the_work(run_cli, tmp_path):
 
 
 def test_an_unexpected_exception_is_an_internal_error_exit_70(run_cli, monkeypatch):
-    import nilpotent.core.filtration as filtration
+    import nilpotent.core.analysis.filtration as filtration
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("planted bug")
@@ -149,7 +149,7 @@ def test_expansion_size_is_limited(run_cli):
 
 
 def test_expansion_estimate_bounds_the_true_term_count():
-    from nilpotent.core.expressions import expanded_terms, parse_expression
+    from nilpotent.core.model.expressions import expanded_terms, parse_expression
 
     names = {c: sp.Symbol(c) for c in "xyz"}
     for text in ("(x+y)**5", "(x+y+z+1)**4*(x-y)**3", "sin(x+y)**3 + (x*y+z)**2"):
@@ -167,7 +167,7 @@ def test_explicit_max_length_is_within_the_hall_word_budget(run_cli):
 
 @pytest.mark.parametrize("what", ["coordinates", "fields", "name"])
 def test_model_size_is_limited(tmp_path, what):
-    from nilpotent.core.modelfile import load_model_file
+    from nilpotent.core.model.modelfile import load_model_file
 
     coords = [f"q{k}" for k in range(3)]
     fields = [{"q0": "1"}]
@@ -337,7 +337,7 @@ def test_look_alike_names_are_refused(run_cli, tmp_path):
     accented = tmp_path / "acc.json"  # a combining accent: not NFKC, refused too
     accented.write_text(json.dumps({"coordinates": ["e", "e\u0301"], "fields": [{"e": "1"}]}))
     with pytest.raises(ModelError):
-        from nilpotent.core.modelfile import load_model_file
+        from nilpotent.core.model.modelfile import load_model_file
 
         load_model_file(accented)
 
@@ -484,7 +484,7 @@ _JSONISH = st.recursive(
     },
 ))
 def test_any_model_structure_is_accepted_or_refused_clearly(data):
-    from nilpotent.core.modelfile import system_from_dict
+    from nilpotent.core.model.modelfile import system_from_dict
     from nilpotent.errors import NilpotentError
 
     with contextlib.suppress(NilpotentError):

@@ -11,14 +11,14 @@ import sympy as sp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.modelfile import (
+from nilpotent.core.model.modelfile import (
     ALLOWED_KEYS,
     dump_model_file,
     load_model_file,
     system_from_dict,
     system_to_dict,
 )
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ExpressionError, ModelError
 
 DATA = Path(__file__).parent / "data"

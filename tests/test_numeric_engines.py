@@ -10,13 +10,8 @@ import pytest
 from nilpotent.errors import OptionError
 from nilpotent.models import get_model
 from nilpotent.numeric import compile_fields, compile_system, integrate
-from nilpotent.numeric.engines import (
-    AUTO_NUMBA_BATCH,
-    ENGINES,
-    Engine,
-    choose_engine,
-    engine_names,
-)
+from nilpotent.numeric.engines import AUTO_NUMBA_BATCH, ENGINES, choose_engine, engine_names
+from nilpotent.numeric.engines.base import Engine
 from nilpotent.numeric.integrate import METHODS
 from nilpotent.numeric.signals import bracket_inputs
 

@@ -1,4 +1,4 @@
-"""Bracket generation certified along the orbit (``nilpotent.core.orbit``).
+"""Bracket generation certified along the orbit (``nilpotent.core.analysis.orbit``).
 
 Independent checks: the end box of a certificate must contain the end point of
 the flow computed by scipy's ``solve_ivp`` (a separate integrator); the car with
@@ -21,10 +21,10 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from nilpotent.core.filtration import analyze
-from nilpotent.core.orbit import certify_by_orbit
-from nilpotent.core.points import parse_point
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.analysis.orbit import certify_by_orbit
+from nilpotent.core.model.points import parse_point
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.models import get_model, load_system
 
 CASES = Path(__file__).parent / "data" / "cases"

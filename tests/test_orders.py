@@ -9,9 +9,9 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.brackets import bracket
-from nilpotent.core.orders import field_order, function_order, weighted_order
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.coordinates.orders import field_order, function_order, weighted_order
+from nilpotent.core.lie.brackets import bracket
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 
 x1, x2, x3 = sp.symbols("x1:4")

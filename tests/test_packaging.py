@@ -4,8 +4,8 @@ built from the sdist) that install into a clean virtual environment and run.
 The clean environment installs the wheel with its dependencies from the package index
 (pip's cache makes this about 35 s once ``make test`` has installed the project); what
 this test checks is the package itself: its files, its declared dependencies (a missing
-one fails the smoke test), its entry point and its data (the paper's LaTeX source the
-audit reads).
+one fails the smoke test), its entry point, its data (the paper's LaTeX source the
+audit reads, the example worlds ``--world room`` reads), its LICENSE and its metadata.
 """
 
 from __future__ import annotations
@@ -42,10 +42,19 @@ def test_wheel_and_sdist_install_into_a_fresh_venv_and_run(tmp_path):
         "nilpotent/py.typed",
         "nilpotent/report/assets/paper.tex",
         "nilpotent/cli/app.py",
+        *(f"nilpotent/planning/worlds/{w}.toml" for w in ("room", "parking")),
     )
     for needed in needed_files:
         assert needed in names, needed
     assert any(n.endswith("entry_points.txt") for n in names)
+    assert any(n.endswith(".dist-info/licenses/LICENSE") for n in names), "LICENSE shipped"
+    (metadata_name,) = [n for n in names if n.endswith(".dist-info/METADATA")]
+    metadata = zipfile.ZipFile(wheel).read(metadata_name).decode()
+    assert "License-Expression: MIT" in metadata
+    assert "Author: The nilpotent contributors" in metadata
+    assert "Classifier: Programming Language :: Python :: 3.11" in metadata
+    assert "Keywords:" in metadata and "nonholonomic" in metadata
+    assert "Provides-Extra: docs" in metadata
     with tarfile.open(sdist) as tar:
         members = tar.getnames()
     assert any(m.endswith("src/nilpotent/report/assets/paper.tex") for m in members)
@@ -61,6 +70,9 @@ def test_wheel_and_sdist_install_into_a_fresh_venv_and_run(tmp_path):
     exe = str(venv / "bin" / "nilpotent")
     models = _run([exe, "models"], cwd=tmp_path)
     assert "trident-snake" in models.stdout
+    room = _run([str(python), "-c", "import nilpotent; print(nilpotent.load_world('room').bounds)"],
+                cwd=tmp_path)  # a world by name, read from the installed package's data
+    assert room.stdout.strip() == "((-5.0, 13.0), (-6.0, 6.0))"
     out = _run([exe, "approximate", "trident-snake", "--json"], cwd=tmp_path)
     payload = json.loads(out.stdout)
     assert payload["growth_vector"] == [3, 6]

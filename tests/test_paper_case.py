@@ -10,7 +10,7 @@ import dataclasses
 import pytest
 import sympy as sp
 
-from nilpotent.core.approximation import approximate, certify
+from nilpotent.core.coordinates.approximation import approximate, certify
 from nilpotent.models import get_model
 from polynomial_systems import (
     function_order,

@@ -23,8 +23,8 @@ from matplotlib.path import Path as MplPath
 from scipy.integrate import solve_ivp
 
 import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
-from nilpotent.core.modelfile import system_from_dict, system_to_dict
-from nilpotent.core.outline import Limits
+from nilpotent.core.model.modelfile import system_from_dict, system_to_dict
+from nilpotent.core.model.outline import Limits
 from nilpotent.errors import ModelError, PlanningError, WorldError
 from nilpotent.models import get_model
 from nilpotent.models.trident import TridentGeometry
@@ -33,7 +33,7 @@ from nilpotent.planning.verify import Checker
 from nilpotent.planning.world import World, world_from_dict
 
 ALPHA = (0.0, 2 * math.pi / 3, 4 * math.pi / 3)
-ROOM = Path(__file__).resolve().parents[1] / "examples" / "worlds" / "room.toml"
+ROOM = Path(__file__).resolve().parents[1] / "src/nilpotent/planning/worlds/room.toml"
 
 UNICYCLE = {
     "coordinates": ["x", "y", "theta"],

@@ -126,6 +126,23 @@ def test_plan_json_is_the_interface_schema():
             assert set(inp) == {"constant", "cos", "sin"}
 
 
+def test_plan_json_is_strict_with_non_finite_numbers():
+    """A Newton step has no homogeneous distance (NaN): to_json() is still strict JSON,
+    the number null and its place listed (issue 18: every to_json() strict)."""
+    import dataclasses
+    import math
+
+    p = plan(get_model("unicycle"), (0, 0, 0), (sp.Rational(1, 10), 0, 0), engine="scipy")
+    assert p.iterations
+    first = dataclasses.replace(p.iterations[0], distance=math.nan)
+    q = dataclasses.replace(p, iterations=(first, *p.iterations[1:]))
+    data = q.to_json()
+    text = json.dumps(data, allow_nan=False)  # raises on NaN/Infinity
+    assert json.loads(text)["iterations"][0]["distance"] is None
+    assert data["undefined"]["paths"] == ["iterations[0].distance"]
+    assert math.isnan(q.json_fields()["iterations"][0]["distance"])
+
+
 def test_start_equal_goal_gives_an_empty_plan():
     p = plan(get_model("unicycle"), (0, 0, 0), (0, 0, 0), engine="scipy")
     assert p.segments == () and p.error == 0 and isinstance(p, Plan)
@@ -173,7 +190,7 @@ def test_shooting_refinement_finishes_a_truncated_plan():
 
 
 def test_not_bracket_generating_is_reported():
-    from nilpotent.core.system import ControlSystem
+    from nilpotent.core.model.system import ControlSystem
     from nilpotent.errors import NotBracketGeneratingError
 
     x, y, z = sp.symbols("x y z")

@@ -9,10 +9,9 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.expressions import real_value
-from nilpotent.core.points import format_point, parse_param_assignments, parse_point
-from nilpotent.core.spans import exact_decimals
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.expressions import exact_decimals, real_value
+from nilpotent.core.model.points import format_point, parse_param_assignments, parse_point
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError, PointError
 
 x, y, th = sp.symbols("x y theta")
@@ -108,7 +107,8 @@ def test_format_point():
 
 
 _values = st.one_of(
-    st.fractions(max_denominator=50).map(lambda f: sp.Rational(f.numerator, f.denominator)),
+    st.fractions(min_value=-10**6, max_value=10**6, max_denominator=50).map(
+        lambda f: sp.Rational(f.numerator, f.denominator)),
     st.floats(min_value=-1e6, max_value=1e6, allow_nan=False).map(sp.Float),
     st.sampled_from([sp.pi / 3, -sp.sqrt(2) / 2, sp.E, sp.atan(sp.Rational(1, 3))]),
 )

@@ -13,12 +13,12 @@ from flint import arb, fmpq
 from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.brackets import bracket, format_word
-from nilpotent.core.filtration import analyze
-from nilpotent.core.polynomial_fields import polynomial_fields
-from nilpotent.core.spans import Decision, Span
-from nilpotent.core.system import ControlSystem
-from nilpotent.core.word_values import WordValues
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.decide.spans import Decision, Span
+from nilpotent.core.lie.brackets import bracket, format_word
+from nilpotent.core.lie.polynomial_fields import polynomial_fields
+from nilpotent.core.lie.word_values import WordValues
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NilpotentError
 from nilpotent.models import get_model
 
@@ -183,8 +183,8 @@ def test_exact_values_are_fmpq():
 )
 def test_the_expression_path_gives_the_same_analysis(model, point, monkeypatch):
     """A second method: the same analysis with the polynomial form switched off."""
-    import nilpotent.core.word_values as word_values
-    from nilpotent.core.points import parse_point
+    import nilpotent.core.lie.word_values as word_values
+    from nilpotent.core.model.points import parse_point
 
     fast = analyze(get_model(model), parse_point(point, get_model(model)))
     monkeypatch.setattr(word_values, "polynomial_fields", lambda sys: None)
@@ -209,7 +209,7 @@ def test_random_elementary_systems_agree_with_the_expression_path(terms, point):
 
     ``max_length=4`` bounds the search at singular points (no time budget involved).
     """
-    import nilpotent.core.word_values as word_values
+    import nilpotent.core.lie.word_values as word_values
 
     comps = [sum((c * e for c, e in comp), sp.Integer(0)) for comp in terms]
     sys = ControlSystem("random", (x, y, z), (tuple(comps[:3]), tuple(comps[3:])))

@@ -8,10 +8,11 @@ import pytest
 import sympy as sp
 from hypothesis import HealthCheck, given, settings
 
-from nilpotent.core.brackets import word_field
-from nilpotent.core.filtration import analyze
-from nilpotent.core.privileged import METHODS, privileged_coordinates
-from nilpotent.core.system import ControlSystem
+from conftest import model_point
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.coordinates.privileged import METHODS, privileged_coordinates
+from nilpotent.core.lie.brackets import word_field
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NotBracketGeneratingError, NotPrivilegedError, OptionError, PointError
 from nilpotent.models import get_model
 from polynomial_systems import (
@@ -45,11 +46,21 @@ def check_orders_with_sympy(sys: ControlSystem, coords) -> None:
         assert function_order(sys.specialized_fields, sys.coordinates, yj, p, wj + 1) == wj
 
 
+#: Built-ins whose linear adapted coordinates are not privileged at their example point, with the
+#: independent reason: the kinematic snake at alpha1 = alpha2 = pi/2 has X1 X1 z4 = 1/2 there
+#: (z = A (x - p), order 2 < weight 3; tests/test_models.py re-derives it).
+LINEAR_NOT_PRIVILEGED = {"kinematic-snake": "y4 has order 2 but weight 3"}
+
+
 @pytest.mark.parametrize("method", ALL_METHODS)
-@pytest.mark.every_model(slow=("trident-snake", "trident-snake-joints"))  # 10 s per method
-def test_orders_equal_weights_recomputed(model, method):
+@pytest.mark.every_model(slow=("trident-snake", "trident-snake-joints", "kinematic-snake"))
+def test_orders_equal_weights_recomputed(model, method):  # trident, snake: up to 10 s a method
     sys = model
-    coords = privileged_coordinates(sys, None, method)
+    if method == "linear" and sys.name in LINEAR_NOT_PRIVILEGED:
+        with pytest.raises(NotPrivilegedError, match=LINEAR_NOT_PRIVILEGED[sys.name]):
+            privileged_coordinates(sys, model_point(model), method)
+        return
+    coords = privileged_coordinates(sys, model_point(model), method)
     assert coords.orders == coords.weights
     check_orders_with_sympy(sys, coords)
     assert all(
@@ -226,8 +237,8 @@ def test_float_mode_vanishes_exactly_at_the_exact_point():
 @pytest.mark.parametrize("method", ["linear", "algebraic", "exponential"])
 @pytest.mark.parametrize("name", ["trident-snake", "trident-snake-paper", "car-trailers:3"])
 def test_orders_agree_with_core_orders(name, method):
-    """Second oracle: nilpotent.core.orders.function_order (symbolic chains, another module)."""
-    from nilpotent.core.orders import function_order as chains_order
+    """Second oracle: coordinates.orders.function_order (symbolic chains, another module)."""
+    from nilpotent.core.coordinates.orders import function_order as chains_order
 
     sys = get_model(name)
     coords = privileged_coordinates(sys, None, method)
@@ -241,10 +252,10 @@ def test_orders_agree_with_core_orders(name, method):
 def test_two_ways_of_computing_orders_agree():
     """Orders of non-privileged (linear) coordinates: read in Bellaïche's coordinates, or by
     chains of Lie derivatives on ordinary jets; both give (1, 1, 2, 2) for engel_changed."""
-    from nilpotent.core.privileged import _certified_orders, _Context, _identity
+    from nilpotent.core.coordinates.privileged import FrameContext, _certified_orders, _identity
 
     sys = engel_changed()
-    ctx = _Context.of(analyze(sys), False)
+    ctx = FrameContext.of(analyze(sys), False)
     lin = _identity(4)
     via_reference, _ = _certified_orders(ctx, lin, lin)
     via_chains, _ = _certified_orders(ctx, lin, lin, use_reference=False)

@@ -17,7 +17,8 @@ INIT = Path(nilpotent.__file__)
 
 
 def _listed_imports() -> tuple[set[str], set[str]]:
-    """Names imported ``X as X`` at top level (eager) and inside ``if TYPE_CHECKING:`` (lazy)."""
+    """Names imported ``X as X`` at top level (eager) and inside ``if TYPE_CHECKING:`` (lazy;
+    ``f as g`` there makes ``g`` a second public name of ``f``)."""
     tree = ast.parse(INIT.read_text(encoding="utf-8"))
     eager: set[str] = set()
     lazy: set[str] = set()
@@ -28,8 +29,8 @@ def _listed_imports() -> tuple[set[str], set[str]]:
             for stmt in node.body:
                 assert isinstance(stmt, ast.ImportFrom), ast.unparse(stmt)
                 for alias in stmt.names:
-                    assert alias.asname == alias.name, f"write {alias.name} as {alias.name}"
-                    lazy.add(alias.name)
+                    assert alias.asname, f"write {alias.name} as {alias.name}"
+                    lazy.add(alias.asname)
     return eager, lazy
 
 
@@ -43,17 +44,71 @@ def test_all_is_exactly_the_listed_imports():
 @pytest.mark.parametrize("name", sorted(_listed_imports()[1]))
 def test_lazy_name_is_the_defining_modules_object(name):
     tree = ast.parse(INIT.read_text(encoding="utf-8"))
-    (module,) = {
-        stmt.module
+    ((module, original),) = {
+        (stmt.module, a.name)
         for node in tree.body
         if isinstance(node, ast.If)
         for stmt in node.body
-        if isinstance(stmt, ast.ImportFrom) and any(a.name == name for a in stmt.names)
+        if isinstance(stmt, ast.ImportFrom)
+        for a in stmt.names
+        if a.asname == name
     }
     import importlib
 
-    assert getattr(nilpotent, name) is getattr(importlib.import_module(module), name)
+    assert getattr(nilpotent, name) is getattr(importlib.import_module(module), original)
     assert name in dir(nilpotent)
+
+
+#: ``nilpotent COMMAND`` -> the function ``nilpotent.COMMAND`` calls (README "Command line
+#: and Python"); ``steer`` is the local steering ``nilpotent plan`` does not expose.
+COMMANDS = {
+    "analyze": "nilpotent.core.analysis.filtration:analyze",
+    "approximate": "nilpotent.core.coordinates.approximation:approximate",
+    "simulate": "nilpotent.simulation.comparison:compare_bracket_motion",
+    "scaling": "nilpotent.simulation.scaling:scaling_study",
+    "sweep": "nilpotent.simulation.sweep:sweep",
+    "plan": "nilpotent.planning.global_planner:plan_global",
+    "steer": "nilpotent.planning.iterative:plan",
+    "execute": "nilpotent.planning.execute:execute_plan",
+    "reproduce": "nilpotent.report.pipeline:reproduce",
+}
+
+
+@pytest.mark.parametrize("name", sorted(COMMANDS))
+def test_the_api_is_named_like_the_commands(name):
+    """``nilpotent.X`` is the function (never a module, whatever was imported before)."""
+    import importlib
+    import types
+
+    importlib.import_module("nilpotent.simulation")
+    importlib.import_module("nilpotent.planning")
+    module, function = COMMANDS[name].split(":")
+    value = getattr(nilpotent, name)
+    assert not isinstance(value, types.ModuleType)
+    assert value is getattr(importlib.import_module(module), function)
+    # no module of that name could shadow it after an ``import nilpotent.<name>``
+    assert not (INIT.parent / f"{name}.py").exists()
+    assert not (INIT.parent / name).is_dir()
+
+
+def test_the_commands_call_the_functions_of_the_same_name():
+    """Each command module imports the function the API names after it (read from the code)."""
+    cli = INIT.parent / "cli"
+    for name, target in COMMANDS.items():
+        if name == "steer":
+            continue
+        module, function = target.split(":")
+        paths = [cli / f"cmd_{name}.py", cli / f"{name}_options.py"]
+        imported = {
+            (node.module, a.name)
+            for path in paths
+            if path.exists()
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+            if isinstance(node, ast.ImportFrom)
+            for a in node.names
+        }
+        faces = {module, module.rpartition(".")[0]}
+        assert any((m, function) in imported for m in faces), (name, target)
 
 
 def test_unknown_attribute_is_an_attribute_error():
@@ -171,3 +226,29 @@ def test_parameter_names_follow_the_convention(name):
             pytest.fail(f"nilpotent.{name}({pname}): write {_NOT_CONVENTIONAL[pname]}")
         if pname in ("timepts", "t_eval", "initial_state", "x_0", "p"):
             pytest.fail(f"nilpotent.{name}({pname}): write {_NOT_CONVENTIONAL[pname]}")
+
+
+def test_every_to_json_is_strict():
+    """Every ``to_json`` returns through the strict encoder (``json_object`` or
+    ``plan_json``, both :func:`nilpotent.strict_json.json_safe`): no NaN/Infinity ever."""
+    loose = []
+    for path in sorted(INIT.parent.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for func in ast.walk(tree):
+            if not (isinstance(func, ast.FunctionDef) and func.name == "to_json"):
+                continue
+            nested = {id(n) for d in ast.walk(func) if isinstance(d, ast.FunctionDef | ast.Lambda)
+                      and d is not func for n in ast.walk(d)}
+            for node in ast.walk(func):
+                if isinstance(node, ast.Return) and id(node) not in nested and not (
+                        isinstance(node.value, ast.Call)
+                        and getattr(node.value.func, "id", "") in ("json_object", "plan_json")):
+                    loose.append(f"{path.relative_to(INIT.parent)}:{node.lineno}")
+    assert loose == []
+    from nilpotent.strict_json import json_object
+
+    assert json_object({"a": [1.0, float("inf")]}) == {
+        "a": [1.0, None],
+        "undefined": {"paths": ["a[1]"], "why": json_object({"x": float("nan")})["undefined"][
+            "why"]},
+    }

@@ -7,7 +7,7 @@ import sympy as sp
 from hypothesis import given
 from hypothesis import strategies as st
 
-from nilpotent.core.expressions import parse_expression
+from nilpotent.core.model.expressions import parse_expression
 from nilpotent.errors import ExpressionError
 from nilpotent.report.latexmath import (
     PARTIAL_PREFIX,

@@ -12,7 +12,7 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.approximation import approximate
+from nilpotent.core.coordinates.approximation import approximate
 from nilpotent.errors import OptionError
 from nilpotent.models import get_model
 from nilpotent.numeric import Status, compile_fields

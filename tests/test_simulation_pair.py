@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from nilpotent.core.approximation import approximate
+from nilpotent.core.coordinates.approximation import approximate
 from nilpotent.errors import ModelError
 from nilpotent.models import get_model
 from nilpotent.numeric.compile import compile_map
@@ -89,19 +89,15 @@ def test_layers_import_only_downward():
     assert out == "[]"
 
 
-def test_stable_import_paths_re_export_the_one_home():
-    import nilpotent.simulate as simulate_path
+def test_the_top_level_names_are_the_simulation_functions():
+    """``nilpotent.simulate``/``scaling``/``sweep`` are the functions of the commands (the
+    modules of those names are gone), the one home being :mod:`nilpotent.simulation`."""
+    import nilpotent
     import nilpotent.simulation as simulation
-    import nilpotent.sweep as sweep_path
-    from nilpotent.numeric import signals
 
-    for name in ("simulate", "compare_bracket_motion", "scaling_study", "Comparison",
-                 "ScalingStudy", "Trajectory", "DEFAULT_AMPLITUDES"):
-        assert getattr(simulate_path, name) is getattr(simulation, name)
-    for name in ("Signal", "FunctionSignal", "bracket_signal", "sinusoids", "piecewise_constant"):
-        assert getattr(simulate_path, name) is getattr(signals, name)
-    for name in ("sweep", "SweepResult", "SweepParameters", "amplitude_range", "DESIGNS"):
-        assert getattr(sweep_path, name) is getattr(simulation, name)
+    assert nilpotent.simulate is simulation.compare_bracket_motion
+    assert nilpotent.scaling is simulation.scaling_study
+    assert nilpotent.sweep is simulation.sweep
 
 
 def test_a_trajectory_from_samples_alone():

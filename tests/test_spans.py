@@ -7,17 +7,10 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.filtration import analyze
-from nilpotent.core.spans import (
-    Decision,
-    MeasuredSpan,
-    Span,
-    ball,
-    exact_decimals,
-    is_zero,
-    rank,
-)
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.analysis.filtration import analyze
+from nilpotent.core.decide.spans import Decision, MeasuredSpan, Span, ball, is_zero, rank
+from nilpotent.core.model.expressions import exact_decimals
+from nilpotent.core.model.system import ControlSystem
 
 x1, x2, x3 = sp.symbols("x1 x2 x3")
 x, y, th = sp.symbols("x y theta")

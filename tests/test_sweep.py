@@ -18,7 +18,7 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from nilpotent.core.approximation import approximate
+from nilpotent.core.coordinates.approximation import approximate
 from nilpotent.errors import ExpressionError, MissingExtraError, OptionError
 from nilpotent.models import get_model
 from nilpotent.numeric.integrate import Status
@@ -333,3 +333,14 @@ def test_cli_missing_dask(sweep_cli, monkeypatch):
     assert status == 2
     err = json.loads(stdout)["error"]
     assert err["kind"] == "missing-extra" and "nilpotent[dask]" in err["message"]
+
+
+def test_cli_random_design_counts_its_rows_not_rows_times_amplitudes(sweep_cli):
+    """``--design random`` runs ``--samples`` rows (each with its own amplitude), so the
+    motion limit counts rows: 300 rows over 10,000 amplitudes is 300 motions, well within
+    the limit, though 300 x 10,000 would exceed it."""
+    status, stdout, _ = sweep_cli("sweep", "unicycle", "--bracket", "1,2", "--amplitudes",
+                                  "0.01:0.08:10000", "--design", "random", "--samples", "300",
+                                  "--radius", "0.1", "--json")
+    assert status == 0, stdout
+    assert json.loads(stdout)["summary"]["count"] == 300

@@ -8,7 +8,7 @@ import symengine as se
 import sympy as sp
 from hypothesis import given, settings
 
-from nilpotent.core.taylor import Poly, ZeroTest, bracket, weighted_jets
+from nilpotent.core.coordinates.jets import Poly, ZeroTest, bracket, weighted_jets
 from nilpotent.errors import PointError
 
 X = sp.symbols("x1 x2 x3")

@@ -15,7 +15,7 @@ import pytest
 import sympy as sp
 
 import nilpotent as nil
-from nilpotent.core.expressions import parse_expression
+from nilpotent.core.model.expressions import parse_expression
 from nilpotent.report.latexmath import PARTIAL_PREFIX, vector_field_to_grammar
 from nilpotent.typeset import (
     Display,

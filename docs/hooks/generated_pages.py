@@ -2,21 +2,25 @@
 
 * ``cli.md``: the help of ``nilpotent`` and of each of its commands, as the
   commands print it (``--help``, through the CLI's own parser);
-* ``api.md``: one mkdocstrings entry per name of ``nilpotent.__all__``, at the
-  module that defines it (numpydoc docstrings);
+* ``api/*.md``: one mkdocstrings entry per name of ``nilpotent.__all__``, at the
+  module that defines it (numpydoc docstrings), one page per topic (``API_TOPICS``)
+  and an index of them all;
 * ``tutorial-notebook.md``: the cells of ``docs/tutorial.ipynb`` (markdown as
-  is, code as Python blocks) with a link to the notebook itself;
+  is, code as Python blocks) with the outputs of a fresh run (figures as PNG,
+  results as their typeset HTML) and a link to the notebook itself;
 
-and the mathematics of every page typeset as MathML (:func:`on_page_content`).
+the mathematics of every page typeset as MathML and the docstrings' Sphinx-style
+cross-references made links (:func:`on_page_content`); the README's links, on the
+home page, made relative to the site (:func:`on_page_markdown`).
 """
 
 from __future__ import annotations
 
 import html
 import inspect
-import json
 import re
 from pathlib import Path
+from typing import Any
 
 from mkdocs.structure.files import File
 
@@ -50,31 +54,250 @@ def cli_page() -> str:
     return "\n".join(parts)
 
 
-def api_page() -> str:
+#: The pages of the API reference, in order: (file, title, what it covers, module prefixes).
+#: A name of ``nilpotent.__all__`` goes to the first page one of whose prefixes starts its
+#: module; one no prefix claims goes to "Other" (so a new name is never left out).
+API_TOPICS: tuple[tuple[str, str, str, tuple[str, ...]], ...] = (
+    (
+        "systems",
+        "Systems and analysis",
+        "control systems, brackets and the filtration (growth vector, weights, singular locus)",
+        (
+            "nilpotent.core.model.system",
+            "nilpotent.core.analysis.filtration",
+            "nilpotent.core.lie.brackets",
+            "nilpotent.core.analysis.orbit",
+        ),
+    ),
+    (
+        "coordinates",
+        "Coordinates and approximation",
+        "privileged coordinates, non-holonomic orders, the nilpotent approximation and its "
+        "certificate",
+        (
+            "nilpotent.core.coordinates.privileged",
+            "nilpotent.core.coordinates.approximation",
+            "nilpotent.core.coordinates.orders",
+            "nilpotent.core.coordinates.jets",
+        ),
+    ),
+    (
+        "simulation",
+        "Simulation",
+        "compiled fields, input signals, batched integration, bracket motions and scaling",
+        (
+            "nilpotent.numeric",
+            "nilpotent.simulation.comparison",
+            "nilpotent.simulation.scaling",
+            "nilpotent.simulation.trajectory",
+        ),
+    ),
+    (
+        "sweeps",
+        "Sweeps",
+        "many bracket motions in batches, locally or with Dask",
+        ("nilpotent.simulation.sweep",),
+    ),
+    (
+        "planning",
+        "Planning",
+        "steering with the approximation, limits, outlines, worlds, closed-loop execution",
+        ("nilpotent.planning", "nilpotent.core.model.outline"),
+    ),
+    (
+        "models",
+        "Models and input",
+        "built-in models, model files, points and the expression grammar",
+        (
+            "nilpotent.models",
+            "nilpotent.core.model.modelfile",
+            "nilpotent.core.model.points",
+            "nilpotent.core.model.expressions",
+        ),
+    ),
+    ("paper", "The paper", "the trident snake paper reproduced and audited", ("nilpotent.report",)),
+    (
+        "errors",
+        "Errors",
+        "the exceptions a user can cause, with their `kind`",
+        ("nilpotent.errors",),
+    ),
+)
+
+
+#: Objects outside ``nilpotent.__all__`` that the public docstrings refer to (results'
+#: parts, the plotting functions behind ``.plot()``): documented under "Supporting
+#: objects" of their topic so that the references resolve.
+API_SUPPORTING: dict[str, tuple[str, ...]] = {
+    "systems": (
+        "nilpotent.core.analysis.orbit.OrbitCertificate",
+        "nilpotent.core.analysis.singular.singular_set",
+        "nilpotent.core.analysis.singular.invariant_hypersurface",
+    ),
+    "coordinates": ("nilpotent.core.coordinates.jets.Poly",),
+    "simulation": (
+        "nilpotent.numeric.integrate.BatchSolution",
+        "nilpotent.numeric.integrate.Status",
+        "nilpotent.numeric.signals.FunctionSignal",
+        "nilpotent.numeric.engines.ENGINES",
+        "nilpotent.viz.simulation.plot_comparison",
+        "nilpotent.viz.simulation.plot_scaling_study",
+    ),
+    "sweeps": ("nilpotent.viz.simulation.plot_sweep",),
+    "planning": (
+        "nilpotent.planning.nilpotent.METHODS",
+        "nilpotent.planning.world.builtin_worlds",
+        "nilpotent.viz.plan.plot_plan",
+    ),
+}
+
+
+def api_groups() -> dict[str, list[tuple[str, object]]]:
+    """The names of ``nilpotent.__all__`` by API page (``API_TOPICS``; ``"other"`` last)."""
     import nilpotent
 
-    parts = [
-        "# API reference\n",
-        "Every name of `nilpotent.__all__`, from its docstring (numpydoc), at the module "
-        "that defines it. `import nilpotent as nil` and call `nil.<name>`.\n",
-    ]
+    groups: dict[str, list[tuple[str, object]]] = {t[0]: [] for t in API_TOPICS}
+    groups["other"] = []
     for name in sorted(nilpotent.__all__):
         obj = getattr(nilpotent, name)
-        if not (inspect.isclass(obj) or inspect.isfunction(obj)):
-            parts.append(f"## `{name}`\n\n`nilpotent.{name} = {obj!r}`\n")
+        module = getattr(obj, "__module__", "") if _documented(obj) else ""
+        if name == "MODELS":
+            module = "nilpotent.models"
+        page = next((t[0] for t in API_TOPICS if any(module.startswith(p) for p in t[3])), "other")
+        groups[page].append((name, obj))
+    return groups
+
+
+def _documented(obj: object) -> bool:
+    """A class or a function (also one wrapped by a cache), which mkdocstrings documents."""
+    return inspect.isclass(obj) or inspect.isfunction(inspect.unwrap(obj))  # type: ignore[arg-type]
+
+
+def api_pages() -> dict[str, str]:
+    """``api/index.md`` (the topics and every name) and one page per topic."""
+    import nilpotent
+
+    groups = api_groups()
+    titles = {t[0]: (t[1], t[2]) for t in API_TOPICS}
+    titles["other"] = ("Other", "names no topic claims")
+    index = [
+        "# API reference\n",
+        "Every name of `nilpotent.__all__`, from its docstring (numpydoc), at the module "
+        "that defines it. `import nilpotent as nil` and call `nil.<name>`; "
+        f"`nil.__version__` is `{nilpotent.__version__!r}`. The command line and its JSON "
+        "are on [the interface](../interface.md).\n",
+        "| page | what it covers | names |",
+        "|---|---|---|",
+    ]
+    pages: dict[str, str] = {}
+    shown: dict[int, tuple[str, str]] = {}
+    for key, members in groups.items():
+        members = [(n, o) for n, o in members if n != "__version__"]
+        if not members:
             continue
-        parts.append(
-            f"## `{name}`\n\n::: {obj.__module__}.{obj.__qualname__}\n"
-            "    options:\n      show_root_heading: false\n      heading_level: 3\n"
-        )
-    return "\n".join(parts)
+        title, what = titles[key]
+        names = ", ".join(_index_link(key, n, o) for n, o in members)
+        index.append(f"| [{title}]({key}.md) | {what} | {names} |")
+        parts = [f"# {title}\n", f"{what[0].upper()}{what[1:]}.\n"]
+        for name, obj in members:
+            if id(obj) in shown:  # a second name (named like a command): one entry per object
+                page, first = shown[id(obj)]
+                where = "" if page == key else f"{page}.md"
+                parts.append(f"## `{name}`\n\nThe same function as [`{first}`]({where}#{first}).\n")
+                continue
+            shown[id(obj)] = (key, name)
+            if not _documented(obj):
+                parts.append(f"## `{name}`\n\n{_describe(name, obj)}\n")
+                continue
+            parts.append(
+                f"::: {_path(obj)}\n"
+                "    options:\n      show_root_heading: true\n      heading_level: 2\n"
+                "      show_root_full_path: false\n"
+            )
+        if API_SUPPORTING.get(key):
+            parts.append(
+                "## Supporting objects\n\nNot in `nilpotent.__all__`: import them from their "
+                "module. The names above refer to them.\n"
+            )
+            for path in API_SUPPORTING[key]:
+                parts.append(
+                    f"::: {path}\n"
+                    "    options:\n      show_root_heading: true\n      heading_level: 3\n"
+                    "      show_root_full_path: true\n"
+                )
+        if key == "errors":  # every error class, with its kind, not only the base
+            parts.append(
+                "## All error classes\n\n::: nilpotent.errors\n"
+                "    options:\n      show_root_heading: false\n      heading_level: 3\n"
+                "      members_order: source\n      show_bases: true\n"
+                "      filters: ['!^NilpotentError$']\n"
+            )
+        pages[f"api/{key}.md"] = "\n".join(parts)
+    pages["api/index.md"] = "\n".join(index) + "\n"
+    return pages
+
+
+def _describe(name: str, obj: object) -> str:
+    from collections.abc import Mapping
+
+    if isinstance(obj, Mapping):
+        keys = ", ".join(f"`{k}`" for k in obj)
+        return f"`nilpotent.{name}`: a read-only mapping with the keys {keys}."
+    return f"`nilpotent.{name}` = `{obj!r}`"
+
+
+def _path(obj: object) -> str:
+    return f"{obj.__module__}.{obj.__qualname__}"  # type: ignore[attr-defined]
+
+
+def _index_link(page: str, name: str, obj: object) -> str:
+    if not _documented(obj):
+        return f"[`{name}`]({page}.md#{name.lower()})"
+    return f"[`{name}`][{_path(obj)}]"
+
+
+def executed(text: str) -> Any:
+    """The notebook run top to bottom in a fresh kernel (``nbclient``), in a temporary
+    folder; a cell that raises fails the build (the notebook is broken)."""
+    import tempfile
+
+    import nbclient
+    import nbformat
+
+    notebook = nbformat.reads(text, as_version=4)
+    with tempfile.TemporaryDirectory() as folder:
+        nbclient.NotebookClient(
+            notebook, timeout=600, kernel_name="python3", resources={"metadata": {"path": folder}}
+        ).execute()
+    return notebook
+
+
+def _output(output: dict) -> str:
+    """One output of a code cell as the page shows it: a figure as its PNG, a result as
+    its HTML (typeset MathML), else its text."""
+    kind = output.get("output_type")
+    if kind == "stream":
+        return "```text\n" + "".join(output["text"]).rstrip() + "\n```\n"
+    data = output.get("data", {})
+    if "image/png" in data:
+        png = "".join(data["image/png"]).replace("\n", "")
+        img = f'<img alt="figure" src="data:image/png;base64,{png}">'
+        return f'<div class="nb-output">{img}</div>\n'
+    if "text/html" in data:
+        body = "".join(data["text/html"]).strip()
+        return f'<div class="nb-output">\n{body}\n</div>\n'
+    if "text/plain" in data:
+        return "```text\n" + "".join(data["text/plain"]).rstrip() + "\n```\n"
+    return ""
 
 
 def notebook_page(path: Path) -> str:
-    nb = json.loads(path.read_text(encoding="utf-8"))
+    """The tutorial notebook's cells with the outputs of a fresh run (``executed``)."""
+    nb = executed(path.read_text(encoding="utf-8"))
     parts = [
-        "_This page shows the cells of [the notebook](tutorial.ipynb) (download it and run "
-        "it in Jupyter: the results display typeset). The test suite executes it._\n"
+        "_This page shows [the notebook](tutorial.ipynb) with the outputs of a run made "
+        "when the site was built (download it and run it in Jupyter: the results display "
+        "the same way). The test suite executes it too._\n"
     ]
     for cell in nb["cells"]:
         source = "".join(cell["source"])
@@ -82,6 +305,7 @@ def notebook_page(path: Path) -> str:
             parts.append(source + "\n")
         elif cell["cell_type"] == "code":
             parts.append("```python\n" + source + "\n```\n")
+            parts.extend(_output(o) for o in cell.get("outputs", []))
     return "\n".join(parts)
 
 
@@ -89,24 +313,95 @@ def on_files(files, config):
     docs = Path(config["docs_dir"])
     pages = {
         "cli.md": cli_page(),
-        "api.md": api_page(),
         "tutorial-notebook.md": notebook_page(docs / "tutorial.ipynb"),
+        **api_pages(),
     }
     for name, content in pages.items():
         files.append(File.generated(config, name, content=content))
     return files
 
 
-_MATH = re.compile(
-    r'<(span|div) class="arithmatex">\\[(\[](.*?)\\[)\]]</\1>', re.DOTALL
-)
+_MATH = re.compile(r'<(span|div) class="arithmatex">\\[(\[](.*?)\\[)\]]</\1>', re.DOTALL)
 
 
 _ROLE = re.compile(r":(?:func|class|mod|meth|attr|data|exc|obj):<code>")
 
+#: A Sphinx-style cross-reference of the docstrings, after markdown: a role, then
+#: ``<code>~dotted.path</code>`` (shown as its last part) or ``<code>dotted.path</code>``.
+_XREF = re.compile(
+    r"(?P<role>:(?:func|class|mod|meth|attr|data|exc|obj):)?"
+    r"<code>(?P<tilde>~)?(?P<path>[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)*)(?P<call>\(\))?</code>"
+)
+
+#: A mention of the project's design notes in a docstring: the site has the pages.
+_NOTE = re.compile(
+    r"(?:<code>)?(?P<note>MATH|INTERFACE)\.md(?:</code>)?"
+    r"(?:\s*(?:§|&sect;)\s*(?P<section>\d+)(?:[–-]\d+)?(?:\.\d+)?)?"
+)
+_MATH_ANCHORS = {
+    "1": "brackets",
+    "2": "filtration",
+    "3": "order",
+    "4": "privileged",
+    "5": "approximation",
+    "6": "error",
+    "7": "steering",
+    "8": "trident",
+}
+
+
+def _short_names() -> dict[str, str]:
+    """``name -> module.qualname`` of the documented names of ``nilpotent.__all__``."""
+    import nilpotent
+
+    return {
+        n: _path(getattr(nilpotent, n))
+        for n in nilpotent.__all__
+        if _documented(getattr(nilpotent, n))
+    }
+
+
+def cross_references(html_text: str) -> str:
+    """Sphinx roles of the docstrings as autorefs links (``optional``: an object the site
+    does not document stays code, without a warning).  ``:func:`~a.b.c``` shows ``c``;
+    ``:class:`Name``` of a public name links to where it is documented."""
+    short = _short_names()
+
+    def link(m: re.Match[str]) -> str:
+        path, call = m.group("path"), m.group("call") or ""
+        if path in short and m.group("role"):
+            identifier = short[path]
+        elif path.startswith("nilpotent.") and (m.group("role") or m.group("tilde")):
+            identifier = path
+        else:
+            return m.group(0) if not m.group("role") else m.group(0)[len(m.group("role")) :]
+        title = path.rsplit(".", 1)[-1] if m.group("tilde") else path
+        return f'<autoref identifier="{identifier}" optional><code>{title}{call}</code></autoref>'
+
+    return _XREF.sub(link, html_text)
+
+
+def design_notes(html_text: str, page) -> str:
+    """``MATH.md §N`` / ``INTERFACE.md`` in the docstrings: links to the site's pages."""
+    from mkdocs.utils import get_relative_url
+
+    def link(m: re.Match[str]) -> str:
+        if m.group("note") == "MATH":
+            target, text = "mathematics.md", "the mathematics"
+            anchor = _MATH_ANCHORS.get(m.group("section") or "")
+            if anchor:
+                target, text = f"{target}#{anchor}", f"{text}, §{m.group('section')}"
+        else:
+            target, text = "interface.md", "the interface"
+        url = get_relative_url(target.replace(".md", "/"), page.url)
+        return f'<a href="{url}">{text}</a>'
+
+    return _NOTE.sub(link, html_text)
+
 
 def on_page_content(html_text: str, page, config, files) -> str:
-    r"""Typeset the ``$...$`` of the pages as MathML (offline, no MathJax).
+    r"""Resolve the docstrings' references and typeset the ``$...$`` of the pages as
+    MathML (offline, no MathJax).
 
     ``pymdownx.arithmatex`` (generic mode) leaves ``\(...\)`` and ``\[...\]`` in
     ``arithmatex`` elements; each becomes the formula of
@@ -122,5 +417,32 @@ def on_page_content(html_text: str, page, config, files) -> str:
         except Exception:  # latex2mathml does not know the construction: keep the source
             return m.group(0)
 
-    html_text = _ROLE.sub("<code>", html_text)  # Sphinx roles of the docstrings
+    html_text = cross_references(html_text)
+    html_text = _ROLE.sub("<code>", html_text)  # roles left over (not a dotted name)
+    html_text = design_notes(html_text, page)
     return _MATH.sub(typeset, html_text)
+
+
+#: A markdown link of the README to a file of the repository (``](docs/x.md)``,
+#: ``](benchmarks/RESULTS.md)``): relative to the repository's root.
+_README_LINK = re.compile(r"\[(?P<text>[^\]]+)\]\((?P<target>[^)#\s]+)(?P<anchor>#[^)\s]*)?\)")
+
+
+def on_page_markdown(markdown: str, page, config, files) -> str:
+    """The home page is the README: its links to ``docs/…`` are to the site's pages;
+    its links to other files of the repository (not on the site) become their names."""
+    if page.file.src_uri != "index.md":
+        return markdown
+    if markdown.strip() == '--8<-- "README.md"':  # before the snippets extension runs
+        markdown = (Path(config["config_file_path"]).parent / "README.md").read_text("utf-8")
+
+    def relink(m: re.Match[str]) -> str:
+        target = m.group("target")
+        if "://" in target:
+            return m.group(0)
+        if target.startswith("docs/"):
+            return f"[{m.group('text')}]({target[5:]}{m.group('anchor') or ''})"
+        text = m.group("text")
+        return text if text.startswith("`") else f"`{text}`"
+
+    return _README_LINK.sub(relink, markdown)

@@ -98,3 +98,11 @@ class WorldError(NilpotentError):
     """A world file (workspace bounds and obstacles) is missing or malformed."""
 
     kind = "world"
+
+
+class DaskError(NilpotentError):
+    """A sweep on Dask could not finish: the scheduler was lost, no chunk finished within
+    the progress timeout (no workers, a hung worker), a chunk killed its workers, or a
+    worker cannot run the chunks."""
+
+    kind = "dask"

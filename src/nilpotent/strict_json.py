@@ -15,7 +15,7 @@ from typing import Any
 
 from nilpotent.errors import ComputationLimitError
 
-__all__ = ["json_safe", "json_text"]
+__all__ = ["json_object", "json_safe", "json_text"]
 
 
 def json_safe(obj: Any, *, undefined: list[str] | None = None, where: str = "") -> Any:
@@ -63,9 +63,13 @@ def json_safe(obj: Any, *, undefined: list[str] | None = None, where: str = "") 
     raise TypeError(f"cannot write a {type(obj).__name__} as JSON ({where or 'top level'})")
 
 
-def json_text(obj: Any) -> str:
-    """The JSON text of ``obj``: no NaN/infinity (undefined values become ``null`` and are
-    listed under ``"undefined"`` of a top-level object, INTERFACE.md "JSON numbers")."""
+def json_object(obj: Any) -> Any:
+    """``obj`` as strict JSON data: what every ``to_json()`` returns.
+
+    :func:`json_safe`, and for an object with non-finite numbers, their places
+    under ``"undefined"`` (``{"paths": [...], "why": ...}``, INTERFACE.md "JSON
+    numbers"), so that ``json.dumps(result.to_json(), allow_nan=False)`` always works.
+    """
     undefined: list[str] = []
     clean = json_safe(obj, undefined=undefined)
     if undefined and isinstance(clean, dict):
@@ -73,6 +77,12 @@ def json_text(obj: Any) -> str:
             "paths": undefined,
             "why": "these quantities are not finite numbers (NaN or infinity) and are null",
         })
-    return json.dumps(clean, indent=2, allow_nan=False) + "\n"
+    return clean
+
+
+def json_text(obj: Any) -> str:
+    """The JSON text of ``obj``: no NaN/infinity (undefined values become ``null`` and are
+    listed under ``"undefined"`` of a top-level object, INTERFACE.md "JSON numbers")."""
+    return json.dumps(json_object(obj), indent=2, allow_nan=False) + "\n"
 
 

@@ -290,7 +290,7 @@ def _field_rows(
 
 
 def system_display(system: Any) -> Display:
-    """A :class:`~nilpotent.core.system.ControlSystem`: its fields, coordinates and parameters."""
+    """A :class:`~nilpotent.core.model.ControlSystem`: its fields, coordinates and parameters."""
     blocks: list[Block] = [
         Text(f"coordinates ({', '.join(system.coordinate_names)}); {system.m} fields"),
         Equations(_field_rows(system.fields, system.coordinates, "X")),
@@ -305,7 +305,7 @@ def system_display(system: Any) -> Display:
 
 
 def filtration_display(filtration: Any) -> Display:
-    """A :class:`~nilpotent.core.filtration.Filtration`: growth, weights, the adapted frame."""
+    """A :class:`~nilpotent.core.analysis.Filtration`: growth, weights, the adapted frame."""
     coords = filtration.system.coordinates
     kind = {True: "regular point", False: "singular point"}.get(
         filtration.regular, "regularity undetermined"
@@ -339,7 +339,7 @@ def filtration_display(filtration: Any) -> Display:
 
 
 def privileged_display(coordinates: Any) -> Display:
-    """:class:`~nilpotent.core.privileged.PrivilegedCoordinates`: the change, weights, orders."""
+    """:class:`~nilpotent.core.coordinates.PrivilegedCoordinates`: the change, weights, orders."""
     system = coordinates.filtration.system
     rows = tuple(
         (Math(sp.latex(y)), str(w), str(o), Math(expr_latex(e)))
@@ -369,7 +369,7 @@ def privileged_display(coordinates: Any) -> Display:
 
 
 def certificate_display(certificate: Any) -> Display:
-    """A :class:`~nilpotent.core.approximation.Certificate`: each computed check and verdict."""
+    """A :class:`~nilpotent.core.coordinates.Certificate`: each computed check and verdict."""
 
     def verdict(ok: bool) -> str:
         return "passed" if ok else "FAILED"
@@ -396,7 +396,7 @@ def certificate_display(certificate: Any) -> Display:
 
 
 def approximation_display(approx: Any) -> Display:
-    """A :class:`~nilpotent.core.approximation.NilpotentApproximation` with its certificate."""
+    """A :class:`~nilpotent.core.coordinates.NilpotentApproximation` with its certificate."""
     coords = approx.coordinates
     system = approx.system
     cert = certificate_display(approx.certificate)

@@ -17,6 +17,7 @@ Conventions for every command:
 from __future__ import annotations
 
 import functools
+import math
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -143,10 +144,13 @@ own nilpotent approximation."""
 MAX_CHUNK_SIZE = 1_000_000
 """Largest chunk of a sweep (``--chunk-size``)."""
 MAX_SEED = 2**63 - 1
-"""Largest random seed (``--seed``)."""
+"""Largest random seed (``--seed``): within what numpy's generators and OMPL's
+(``uint64``, the seed + 1) accept."""
+MAX_CORRECTIONS = 1000
+"""Most re-plans toward the goal of ``execute`` (``--max-corrections``)."""
 MAX_BRACKET_LENGTH = 64
 """Longest bracket length an option may ask for (``--max-length``); the Hall-word budget
-of :mod:`nilpotent.core.filtration` usually bounds it lower."""
+of :mod:`nilpotent.core.analysis.filtration` usually bounds it lower."""
 
 JsonOpt = Annotated[
     bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else.")
@@ -186,7 +190,7 @@ def work(description: str, total: int | None = None):
 
 def load_model_option(spec: str, params: list[str] | None):
     """Load MODEL (a built-in name or a model file) with ``--param`` assignments applied."""
-    from nilpotent.core.points import parse_param_assignments
+    from nilpotent.core.model.points import parse_param_assignments
     from nilpotent.models import load_system
 
     values = parse_param_assignments(list(params or []), option="--param")
@@ -195,7 +199,7 @@ def load_model_option(spec: str, params: list[str] | None):
 
 def parse_point_option(text: str | None, system, option: str = "--at"):
     """Parse a point option (``--at``, ``--from``, ``--to``); ``None`` means the origin."""
-    from nilpotent.core.points import parse_point
+    from nilpotent.core.model.points import parse_point
 
     if text is None:
         return system.origin()
@@ -309,14 +313,16 @@ def cli_errors(func: F) -> F:
 
 
 # --- integer options with bounds ---------------------------------------------------
-def bounded_int(option: str, low: int, high: int, what: str = "") -> Callable[[Any], int]:
+def bounded_int(option: str, low: int, high: int, what: str = "",
+                above: type[NilpotentError] = ComputationLimitError) -> Callable[[Any], int]:
     """A typer ``parser`` for a whole-number option between ``low`` and ``high``.
 
     The text is read without ever reaching Python's 4300-digit conversion limit.
     Not a whole number: a usage error; below ``low``: an
     :class:`~nilpotent.errors.OptionError`; above ``high`` (what the tool can do in
     bounded time and memory): a :class:`~nilpotent.errors.ComputationLimitError`
-    naming the limit and the option (``what`` may say more).
+    naming the limit and the option (``what`` may say more), or ``above`` where the
+    bound is the range of the value's type (a seed: :class:`OptionError`).
     """
 
     def parse(value: Any) -> int:
@@ -329,16 +335,67 @@ def bounded_int(option: str, low: int, high: int, what: str = "") -> Callable[[A
                     digits) > 1:
                 raise typer.BadParameter(f"{literal(value, 60)!r} is not a whole number")
             if len(digits.lstrip("0")) > 30:
-                raise ComputationLimitError(
+                raise above(
                     f"{option} {literal(text, 40)}: far above the limit {high:,}{what}")
             number = int(text)
         if number < low:
             raise OptionError(f"{option} must be >= {low}, got {number}")
         if number > high:
-            raise ComputationLimitError(f"{option} {number:,} is above the limit {high:,}{what}")
+            raise above(f"{option} {number:,} is above the limit {high:,}{what}")
         return number
 
     parse.__name__ = f"{option.lstrip('-').replace('-', '_')}_integer"
+    return parse
+
+
+# --- real-number options: finite, within a documented range --------------------------
+def bounded_float(
+    option: str,
+    low: float,
+    high: float | None = None,
+    *,
+    open_low: bool = False,
+    floor: float | None = None,
+    what: str = "",
+) -> Callable[[Any], float]:
+    """A typer ``parser`` for a real-number option in ``[low, high]`` (``(low, high]`` with
+    ``open_low``): the one check of every real number the command line takes.
+
+    ``high`` defaults to :data:`nilpotent.core.model.points.MAX_MAGNITUDE` (1e6), the
+    documented magnitude of user numbers.  Text that is not a number: a usage error;
+    ``nan``, ``inf``, past the range of a double or outside the range: an
+    :class:`~nilpotent.errors.OptionError` naming the option.  ``floor`` (above
+    ``low``): values below it are allowed in principle but cost unbounded time or
+    memory, refused with a :class:`~nilpotent.errors.ComputationLimitError` (``what``
+    says why).
+    """
+
+    def parse(value: Any) -> float:
+        from nilpotent.core.model.points import MAX_MAGNITUDE, check_magnitude
+
+        top = MAX_MAGNITUDE if high is None else high
+        if isinstance(value, bool):
+            raise typer.BadParameter(f"{literal(value, 60)!r} is not a number")
+        if isinstance(value, int | float):
+            number = value
+        else:
+            text = str(value).strip()
+            try:
+                number = float(text)
+            except ValueError:
+                raise typer.BadParameter(f"{literal(value, 60)!r} is not a number") from None
+            if not math.isfinite(number) and not any(w in text.lower() for w in ("inf", "nan")):
+                raise OptionError(f"{option} {literal(text, 40)}: beyond the range of a double "
+                                  f"(allowed: {low:g} to {top:g})")
+        number = check_magnitude(number, option, low=low, high=top)
+        if open_low and number == low:
+            raise OptionError(f"{option} must be > {low:g}, got {number:g}")
+        if floor is not None and number < floor:
+            raise ComputationLimitError(
+                f"{option} {number:g} is below the limit {floor:g}{what}")
+        return number
+
+    parse.__name__ = f"{option.lstrip('-').replace('-', '_')}_number"
     return parse
 
 
@@ -360,17 +417,18 @@ def parse_int_pair(text: str, option: str, upper: int) -> tuple[int, int]:
 
 
 def parse_float_list(text: str, option: str) -> list[float]:
-    """Parse ``A1,A2,...`` as finite floats (plain decimals only)."""
+    """Parse ``A1,A2,...`` as finite floats (plain decimals only) of magnitude at most
+    :data:`nilpotent.core.model.points.MAX_MAGNITUDE`."""
+    from nilpotent.core.model.points import check_magnitude
+
     out: list[float] = []
     for piece in text.split(","):
         piece = piece.strip()
         try:
             value = float(piece)
         except ValueError:
-            raise OptionError(f"{option}: {piece!r} is not a number") from None
-        if value != value or value in (float("inf"), float("-inf")):
-            raise OptionError(f"{option}: {piece!r} is not a finite number")
-        out.append(value)
+            raise OptionError(f"{option}: {literal(piece, 60)!r} is not a number") from None
+        out.append(check_magnitude(value, f"{option} {literal(piece, 60)}"))
     if not out:
         raise OptionError(f"{option}: expected at least one number")
     return out

@@ -14,9 +14,9 @@ from typing import Annotated
 
 import typer
 
-from nilpotent.cli.app import MAX_PERIODS, bounded_int
+from nilpotent.cli.app import MAX_PERIODS, bounded_float, bounded_int
 
-__all__ = ["BracketOpt", "OmegaOpt", "PeriodsOpt"]
+__all__ = ["AmplitudeOpt", "BracketOpt", "OmegaOpt", "PeriodsOpt"]
 
 BracketOpt = Annotated[
     str,
@@ -27,7 +27,12 @@ BracketOpt = Annotated[
     ),
 ]
 OmegaOpt = Annotated[
-    float, typer.Option("--omega", metavar="W", help="Angular frequency ω of the loop (> 0).")
+    float, typer.Option("--omega", metavar="W", help="Angular frequency ω of the loop (> 0).",
+                        parser=bounded_float("--omega", 0.0, open_low=True))
+]
+AmplitudeOpt = Annotated[
+    float, typer.Option("--amplitude", metavar="A", help="Loop amplitude A (> 0).",
+                        parser=bounded_float("--amplitude", 0.0, open_low=True))
 ]
 PeriodsOpt = Annotated[
     int,

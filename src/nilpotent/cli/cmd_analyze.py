@@ -33,8 +33,8 @@ def analysis_payload(system, filtration) -> dict[str, Any]:
 def print_analysis(system, filtration) -> None:
     from rich.table import Table
 
-    from nilpotent.core.brackets import format_word
-    from nilpotent.core.expressions import format_expression
+    from nilpotent.core.lie.brackets import format_word
+    from nilpotent.core.model.expressions import format_expression
 
     console = stdout_console()
     pt = ", ".join(
@@ -129,10 +129,10 @@ def analyze_command(
     json_out: JsonOpt = False,
 ) -> None:
     """Growth vector, weights, step, adapted frame and regular/singular verdict at a point."""
-    from nilpotent.core.brackets import format_word
-    from nilpotent.core.expressions import format_expression
-    from nilpotent.core.filtration import analyze
-    from nilpotent.core.singular import singular_set
+    from nilpotent.core.analysis.filtration import analyze
+    from nilpotent.core.analysis.singular import singular_set
+    from nilpotent.core.lie.brackets import format_word
+    from nilpotent.core.model.expressions import format_expression
 
     system = load_model_option(model, param)
     point = parse_point_option(at, system)

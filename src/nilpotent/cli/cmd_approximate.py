@@ -58,8 +58,8 @@ def approximate_command(
     json_out: JsonOpt = False,
 ) -> None:
     """Privileged coordinates at a point and the nilpotent approximation, with its certificate."""
-    from nilpotent.core.approximation import approximate
-    from nilpotent.core.privileged import METHODS
+    from nilpotent.core.coordinates.approximation import approximate
+    from nilpotent.core.coordinates.privileged import METHODS
 
     if json_out and latex:
         raise OptionError("--json and --latex are exclusive: choose one output format")

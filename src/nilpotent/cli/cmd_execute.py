@@ -8,10 +8,13 @@ from typing import Annotated
 import typer
 
 from nilpotent.cli.app import (
+    MAX_CORRECTIONS,
     JsonOpt,
     ModelArg,
     ParamOpt,
     app,
+    bounded_float,
+    bounded_int,
     cli_errors,
     emit_json,
     literal,
@@ -43,35 +46,33 @@ MismatchOpt = Annotated[
 NoiseOpt = Annotated[
     float,
     typer.Option("--noise", metavar="SIGMA",
-                 help="Standard deviation of the state measurement noise (model units)."),
+                 help="Standard deviation of the state measurement noise (model units).",
+                 parser=bounded_float("--noise", 0.0)),
 ]
 ExecTolOpt = Annotated[
     float,
     typer.Option("--tol", metavar="T",
-                 help="Correct until the measured distance to the goal is at most T."),
+                 help="Correct until the measured distance to the goal is at most T.",
+                 parser=bounded_float("--tol", 0.0, open_low=True)),
 ]
 CorrOpt = Annotated[
-    int, typer.Option("--max-corrections", metavar="N", help="Most re-plans toward the goal.")
+    int,
+    typer.Option("--max-corrections", metavar="N",
+                 help=f"Most re-plans toward the goal (0 to {MAX_CORRECTIONS}).",
+                 parser=bounded_int("--max-corrections", 0, MAX_CORRECTIONS)),
 ]
 
 
 def parse_mismatch(text: str | None) -> dict[str, float]:
-    """``r=0.05,l=-0.05`` → ``{"r": 0.05, "l": -0.05}`` (values: expressions of the grammar)."""
-    from nilpotent.core.expressions import parse_expression, real_value
+    """``r=0.05,l=-0.05`` → ``{"r": 0.05, "l": -0.05}`` (values: expressions of the grammar,
+    read by the one ``NAME=VALUE,...`` parser: each name once)."""
+    from nilpotent.core.model.expressions import real_value
+    from nilpotent.core.model.points import parse_assignments
 
-    out: dict[str, float] = {}
     if not text:
-        return out
-    for part in text.split(","):
-        name, eq, value = part.partition("=")
-        name = name.strip()
-        if not (eq and name and value.strip()):
-            raise OptionError(
-                f"--mismatch {text!r}: expected NAME=FRACTION,... e.g. r=0.05,l=-0.05"
-            )
-        where = f"--mismatch {name}"
-        out[name] = real_value(parse_expression(value, {}, where=where), where=where)
-    return out
+        return {}
+    pairs = parse_assignments(text, "--mismatch", OptionError, "--mismatch r=0.05,l=-0.05")
+    return {name: real_value(value, where=f"--mismatch {name}") for name, value in pairs}
 
 
 @app.command("execute")

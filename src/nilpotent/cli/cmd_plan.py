@@ -16,6 +16,7 @@ from nilpotent.cli.app import (
     ParamOpt,
     PlotOpt,
     app,
+    bounded_float,
     bounded_int,
     check_plot_path,
     check_writable,
@@ -47,7 +48,8 @@ from nilpotent.errors import OptionError
 TolOpt = Annotated[
     float,
     typer.Option("--tol", metavar="T",
-                 help="Stop when the Euclidean distance to the goal is at most T (> 0)."),
+                 help="Stop when the Euclidean distance to the goal is at most T (> 0).",
+                 parser=bounded_float("--tol", 0.0, open_low=True)),
 ]
 AnimateOpt = Annotated[
     Path | None,
@@ -194,7 +196,9 @@ def write_pictures(result, plot: Path | None, animate: Path | None) -> None:
     if plot is not None:
         from nilpotent.viz.plan_world import plot_plan_world
 
-        save_figure(plot_plan_world(result), plot, (result.plan.system.name,))
+        # user texts shown literally: the model's name and the world's (titles)
+        names = (result.plan.system.name,) + ((result.world.name,) if result.world else ())
+        save_figure(plot_plan_world(result), plot, names)
     if animate is not None:
         import matplotlib
 

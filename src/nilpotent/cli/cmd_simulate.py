@@ -2,10 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Annotated
-
-import typer
-
 from nilpotent.cli.app import (
     AtOpt,
     JsonOpt,
@@ -25,7 +21,7 @@ from nilpotent.cli.app import (
     stdout_console,
     work,
 )
-from nilpotent.cli.bracket_options import BracketOpt, OmegaOpt, PeriodsOpt
+from nilpotent.cli.bracket_options import AmplitudeOpt, BracketOpt, OmegaOpt, PeriodsOpt
 
 
 def print_comparison(comp) -> None:
@@ -63,9 +59,7 @@ def print_comparison(comp) -> None:
 def simulate_command(
     model: ModelArg,
     bracket: BracketOpt,
-    amplitude: Annotated[
-        float, typer.Option("--amplitude", metavar="A", help="Loop amplitude A (> 0).")
-    ],
+    amplitude: AmplitudeOpt,
     omega: OmegaOpt = 1.0,
     periods: PeriodsOpt = 1,
     at: AtOpt = None,

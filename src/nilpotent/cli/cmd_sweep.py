@@ -26,6 +26,7 @@ from nilpotent.cli.app import (
     ParamOpt,
     PlotOpt,
     app,
+    bounded_float,
     bounded_int,
     check_plot_path,
     check_writable,
@@ -43,6 +44,9 @@ from nilpotent.cli.app import (
     write_atomically,
 )
 from nilpotent.errors import ComputationLimitError, OptionError
+
+MAX_BOUND = 1e12
+"""Largest ``--bound`` (the blow-up threshold of a trajectory, model units)."""
 
 
 def parse_amplitudes(text: str) -> list[float]:
@@ -83,7 +87,7 @@ def _split_top_level(text: str) -> list[str]:
 
 def parse_vary(items: list[str] | None) -> dict[str, list[Any]]:
     """``--vary NAME=V1,V2,...`` (repeatable); values through the safe expression grammar."""
-    from nilpotent.core.expressions import parse_expression
+    from nilpotent.core.model.expressions import parse_expression
 
     out: dict[str, list[Any]] = {}
     for item in items or []:
@@ -103,7 +107,7 @@ def parse_vary(items: list[str] | None) -> dict[str, list[Any]]:
 def _check_vary_values(model: str, param: list[str] | None, varied: dict[str, list[Any]]
                        ) -> None:
     """Check each ``--vary`` value as ``--param`` would be (positive lengths, ...)."""
-    from nilpotent.core.expressions import format_expression
+    from nilpotent.core.model.expressions import format_expression
     from nilpotent.errors import NilpotentError
 
     for name, values in varied.items():
@@ -188,12 +192,13 @@ def sweep_command(
     radius: Annotated[
         float,
         typer.Option("--radius", metavar="R",
-                     help="Start points uniform in the ball of radius R round p."),
+                     help="Start points uniform in the ball of radius R round p.",
+                     parser=bounded_float("--radius", 0.0)),
     ] = 0.0,
     seed: Annotated[
         int,
         typer.Option("--seed", metavar="S", help="Random seed.",
-                     parser=bounded_int("--seed", 0, MAX_SEED)),
+                     parser=bounded_int("--seed", 0, MAX_SEED, above=OptionError)),
     ] = 0,
     design: Annotated[
         str, typer.Option("--design", metavar="grid|random", help="Sampling design.")
@@ -209,9 +214,13 @@ def sweep_command(
                      help=f"Whole periods of the loop (1 to {MAX_PERIODS}).",
                      parser=bounded_int("--periods", 1, MAX_PERIODS)),
     ] = 1,
-    rtol: Annotated[float, typer.Option("--rtol", help="Relative tolerance.")] = 1e-10,
+    rtol: Annotated[float, typer.Option(
+        "--rtol", help="Relative tolerance (> 0, at most 1).",
+        parser=bounded_float("--rtol", 0.0, 1.0, open_low=True))] = 1e-10,
     bound: Annotated[
-        float, typer.Option("--bound", help="Stop (and report) a trajectory once |x_k| > bound.")
+        float, typer.Option("--bound", help="Stop (and report) a trajectory once |x_k| > bound "
+                            f"(> 0, at most {MAX_BOUND:g}).",
+                            parser=bounded_float("--bound", 0.0, MAX_BOUND, open_low=True))
     ] = 1e6,
     chunk_size: Annotated[
         int,
@@ -221,7 +230,23 @@ def sweep_command(
     dask: Annotated[
         str | None,
         typer.Option("--dask", metavar="ADDRESS|local",
-                     help="Run the chunks on Dask (needs pip install \"nilpotent[dask]\")."),
+                     help="Run the chunks on Dask (needs pip install \"nilpotent[dask]\"): "
+                          "tcp://HOST:PORT, HOST:PORT or local."),
+    ] = None,
+    dask_connect_timeout: Annotated[
+        float | None,
+        typer.Option("--dask-connect-timeout", metavar="S",
+                     parser=bounded_float("--dask-connect-timeout", 0.0, 86400.0,
+                                          open_low=True),
+                     help="Seconds to reach the --dask scheduler (default 10)."),
+    ] = None,
+    dask_progress_timeout: Annotated[
+        float | None,
+        typer.Option("--dask-progress-timeout", metavar="S",
+                     parser=bounded_float("--dask-progress-timeout", 0.0, 86400.0,
+                                          open_low=True),
+                     help="Stop with an error when no chunk finishes for S seconds "
+                          "(default 120)."),
     ] = None,
     out: Annotated[
         Path | None,
@@ -240,6 +265,11 @@ def sweep_command(
         raise OptionError(f"--out {literal(out)}: the rows are written as CSV (use .csv)")
     check_writable(out, "--out")
     check_plot_path(plot)
+    if dask is not None or dask_connect_timeout is not None or dask_progress_timeout is not None:
+        from nilpotent.simulation.executors import check_dask
+
+        check_dask(dask, chunk_size, connect_timeout=dask_connect_timeout,
+                   progress_timeout=dask_progress_timeout)  # before any work
     varied = parse_vary(vary)
     combinations = math.prod(len(v) for v in varied.values())
     if combinations > MAX_VARY_COMBINATIONS:
@@ -251,7 +281,11 @@ def sweep_command(
     _check_vary_values(model, param, varied)
     pairs = [parse_int_pair(b, "--bracket", system.m) for b in bracket]
     point = parse_point_option(at, system)
-    motions = len(amps) * len(pairs) * max(samples, 1) * math.prod(len(v) for v in varied.values())
+    if design == "random":  # `samples` rows, each with its own amplitude, bracket and set
+        motions = max(samples, 1)
+    else:
+        motions = (len(amps) * len(pairs) * max(samples, 1)
+                   * math.prod(len(v) for v in varied.values()))
     if motions > MAX_SWEEP_MOTIONS:
         raise ComputationLimitError(
             f"the sweep asks for {motions:,} bracket motions (amplitudes x brackets x "
@@ -269,6 +303,8 @@ def sweep_command(
             system, pairs, amps, point=point, samples=samples, radius=radius, seed=seed,
             design=design, vary=varied or None, periods=periods, rtol=rtol, atol=rtol * 1e-2,
             bound=bound, chunk_size=chunk_size, dask=dask, progress=progress,
+            dask_connect_timeout=dask_connect_timeout,
+            dask_progress_timeout=dask_progress_timeout,
         )
     if out is not None:
         with write_atomically(out, suffix=".csv") as tmp:

@@ -11,7 +11,12 @@ from typing import Annotated
 
 import typer
 
+from nilpotent.cli.app import MAX_SEED, bounded_float, bounded_int
 from nilpotent.errors import OptionError
+
+MIN_MAX_PIECE = 1e-3
+"""Shortest ``--max-piece``: the global path is cut into ``length / D`` pieces, each
+steered on its own (a D of 1e-9 asked for billions of pieces, 4 GB before any work)."""
 
 FromOpt = Annotated[
     str | None,
@@ -25,8 +30,9 @@ ToOpt = Annotated[
 
 WorldOpt = Annotated[
     Path | None,
-    typer.Option("--world", metavar="W.toml",
-                 help="World file: workspace bounds and obstacles (docs/worlds.md)."),
+    typer.Option("--world", metavar="W",
+                 help="World file (workspace bounds and obstacles), or a built-in world's "
+                      "name: room, parking."),
 ]
 
 LimitOpt = Annotated[
@@ -39,33 +45,45 @@ LimitOpt = Annotated[
 MarginOpt = Annotated[
     float,
     typer.Option("--singular-margin", metavar="M",
-                 help="Keep the model's singular margin >= M (trident-snake-joints: |det M|)."),
+                 help="Keep the model's singular margin >= M (trident-snake-joints: |det M|).",
+                 parser=bounded_float("--singular-margin", 0.0)),
 ]
 
 TimeLimitOpt = Annotated[
     float,
     typer.Option("--time-limit", metavar="S",
-                 help="Give up (exit 2, nothing written) when no plan is found within S seconds."),
+                 help="Give up (exit 2, nothing written) when no plan is found within S seconds.",
+                 parser=bounded_float("--time-limit", 0.0, open_low=True)),
 ]
 
 ClearanceOpt = Annotated[
     float,
     typer.Option("--clearance", metavar="D",
-                 help="Keep the robot more than D (model length units) from every obstacle."),
+                 help="Keep the robot more than D (model length units) from every obstacle.",
+                 parser=bounded_float("--clearance", 0.0)),
 ]
 
-SeedOpt = Annotated[int, typer.Option("--seed", metavar="N", help="Seed of the global planner.")]
+SeedOpt = Annotated[
+    int,
+    typer.Option("--seed", metavar="N", help=f"Seed of the global planner (0 to {MAX_SEED}).",
+                 parser=bounded_int("--seed", 0, MAX_SEED, above=OptionError)),
+]
 
 MaxPieceOpt = Annotated[
     float,
     typer.Option("--max-piece", metavar="D",
-                 help="Longest piece of the global path steered at once (configuration space)."),
+                 help="Longest piece of the global path steered at once (configuration space; "
+                      f"at least {MIN_MAX_PIECE:g}).",
+                 parser=bounded_float("--max-piece", 0.0, open_low=True, floor=MIN_MAX_PIECE,
+                                      what=" (each piece is steered on its own: shorter "
+                                           "pieces cost unbounded time and memory)")),
 ]
 
 
 def parse_limit_options(texts: list[str] | None, system) -> dict[str, tuple[float, float]]:
     """``--limit NAME=LO:HI`` (repeatable) → ``{name: (lo, hi)}``; LO, HI are expressions."""
-    from nilpotent.core.expressions import parse_expression, real_value
+    from nilpotent.core.model.expressions import parse_expression, real_value
+    from nilpotent.core.model.points import check_magnitude
 
     out: dict[str, tuple[float, float]] = {}
     for text in texts or []:
@@ -80,7 +98,8 @@ def parse_limit_options(texts: list[str] | None, system) -> dict[str, tuple[floa
                 f"(coordinates: {', '.join(system.coordinate_names)})"
             )
         where = f"--limit {name}"
-        lo, hi = (real_value(parse_expression(t, {}, where=where), where=where)
+        lo, hi = (check_magnitude(real_value(parse_expression(t, {}, where=where), where=where),
+                                  where)
                   for t in (lo_text, hi_text))
         if lo > hi:
             raise OptionError(f"--limit {text!r}: LO = {lo:g} is above HI = {hi:g}")

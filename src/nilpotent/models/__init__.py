@@ -1,7 +1,8 @@
 """Built-in models: a registry of driftless systems chosen by name.
 
 Families are data (one module per family: :mod:`~nilpotent.models.trident`,
-:mod:`~nilpotent.models.classic`, :mod:`~nilpotent.models.trailers`) plus this
+:mod:`~nilpotent.models.classic`, :mod:`~nilpotent.models.trailers`,
+:mod:`~nilpotent.models.vehicles`, :mod:`~nilpotent.models.groups`) plus this
 registry, which the CLI (``nilpotent models``), the docs and the tests all
 iterate over.
 
@@ -30,10 +31,11 @@ from types import MappingProxyType
 
 import sympy as sp
 
-from nilpotent.core.expressions import format_expression
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.expressions import format_expression
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
+from nilpotent.models.groups import rigid_body, roto_translation
 from nilpotent.models.outlines import with_builtin_constraints
 from nilpotent.models.trailers import car_trailers
 from nilpotent.models.trident import (
@@ -46,6 +48,14 @@ from nilpotent.models.trident import (
     trident_snake_paper,
     wheel_slip,
 )
+from nilpotent.models.vehicles import (
+    car,
+    kinematic_snake,
+    snake_singularity,
+    snakeboard,
+    space_robot,
+)
+from nilpotent.strict_json import json_object
 
 __all__ = [
     "MAX_TRAILERS",
@@ -60,11 +70,15 @@ __all__ = [
     "load_system",
     "models_to_json",
     "paper_singularity",
+    "snake_singularity",
     "wheel_slip",
 ]
 
-#: Largest ``K`` accepted in ``car-trailers:K`` (the symbolic work grows quickly with K).
-MAX_TRAILERS = 50
+#: Largest ``K`` accepted in ``car-trailers:K``: the brackets up to length K + 2 are
+#: needed at every point, and each trailer multiplies their cost by 5-8 (``analyze`` at the
+#: origin: K = 9 in 5.4 s of CPU and 0.26 GB, K = 10 in 46 s and 0.76 GB, K = 11 past the
+#: minutes a command may take; measured 2026-12-01, docs/models.md).
+MAX_TRAILERS = 9
 
 _MODEL_FILE_SUFFIXES = (".toml", ".json")
 
@@ -84,7 +98,7 @@ class ModelInfo:
         Registry name (``"trident-snake"``, ``"car-trailers"``).
     build : Callable[..., ControlSystem]
         ``build()`` (or ``build(K)`` when :attr:`argument` is set) returns the
-        :class:`~nilpotent.core.system.ControlSystem` with its default
+        :class:`~nilpotent.core.model.system.ControlSystem` with its default
         parameter values.
     argument : str or None
         Name of the integer argument written after a colon (``"K"`` for
@@ -98,6 +112,11 @@ class ModelInfo:
         refuses other values with :class:`ModelError`.
     summary : str
         A family's one-line description (``""``: the built model's own).
+    example_at : str
+        A point in the ``--at`` syntax (``"alpha1=pi/2,alpha2=pi/2"``) where
+        the model is defined and regular, for a model whose fields are
+        undefined at the origin (``kinematic-snake``); ``""``: the origin.
+        The ``every_model`` tests and :meth:`example_point` use it.
     """
 
     name: str
@@ -107,6 +126,7 @@ class ModelInfo:
     parameter_note: str = ""
     positive_parameters: bool = False
     summary: str = ""
+    example_at: str = ""
 
     @cached_property
     def example(self) -> ControlSystem:
@@ -138,6 +158,19 @@ class ModelInfo:
         """A spec that :func:`get_model` accepts (``"car-trailers:1"``)."""
         return f"{self.name}:{self.default_argument}" if self.argument else self.name
 
+    def example_point(self, system: ControlSystem | None = None) -> tuple[sp.Expr, ...]:
+        """:attr:`example_at` as a point of ``system`` (default :attr:`example`), exact.
+
+        Parameters
+        ----------
+        system : ControlSystem or None
+            The built model (with any parameters applied); ``None``: :attr:`example`.
+        """
+        from nilpotent.core.model.points import parse_point
+
+        sys = system if system is not None else self.example
+        return parse_point(self.example_at, sys) if self.example_at else sys.origin()
+
     def parameter_summary(self) -> str:
         """``"r=1, l=1"``, the family rule, or ``""`` when there are none."""
         if self.parameter_note:
@@ -146,13 +179,13 @@ class ModelInfo:
 
     def to_json(self) -> dict[str, object]:
         """This entry as one element of the ``nilpotent/models@1`` list (``INTERFACE.md``)."""
-        return {
+        return json_object({
             "name": self.usage,
             "example": self.example_spec,
             "description": self.description,
             "parameters": {k: format_expression(v) for k, v in self.parameters.items()},
             "parameter_rule": self.parameter_summary(),
-        }
+        })
 
 
 #: The built-in models, by registry name (``nilpotent models`` lists them in this order).
@@ -178,6 +211,17 @@ MODELS: Mapping[str, ModelInfo] = MappingProxyType(
             ModelInfo("engel", engel),
             ModelInfo("cartan", cartan),
             ModelInfo("martinet", martinet),
+            ModelInfo("car", car, positive_parameters=True),
+            ModelInfo("snakeboard", snakeboard, positive_parameters=True),
+            ModelInfo(
+                "kinematic-snake",
+                kinematic_snake,
+                positive_parameters=True,
+                example_at="alpha1=pi/2,alpha2=pi/2",
+            ),
+            ModelInfo("space-robot", space_robot, positive_parameters=True),
+            ModelInfo("rigid-body", rigid_body),
+            ModelInfo("roto-translation", roto_translation),
         )
     }
 )
@@ -210,10 +254,14 @@ def _parse_argument(spec: str, info: ModelInfo, text: str) -> int:
             f"model {spec!r}: {info.argument} must be a positive integer "
             f"(e.g. {info.example_spec}), got {text!r}"
         )
-    value = int(text)
+    digits = text.strip().lstrip("0")
+    value = int(digits or "0") if len(digits) <= 6 else MAX_TRAILERS + 1  # no 4300-digit limit
     if value < 1 or value > MAX_TRAILERS:
+        shown = text.strip() if len(text.strip()) <= 20 else f"{text.strip()[:20]}..."
         raise ModelError(
-            f"model {spec!r}: {info.argument} must be between 1 and {MAX_TRAILERS}, got {value}"
+            f"model {spec[:60]!r}: {info.argument} must be between 1 and {MAX_TRAILERS}, got "
+            f"{shown} (each trailer multiplies the symbolic work by 5-8: "
+            f"K = {MAX_TRAILERS} takes seconds, K = {MAX_TRAILERS + 1} about a minute)"
         )
     return value
 
@@ -235,7 +283,8 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
         Unknown name (the message lists the known ones), a bad or missing
         argument, an unknown parameter name, or a length parameter that is
         not a positive number (``trident-snake``: ``r``, ``l``;
-        ``car-trailers``: ``d1..dK``).
+        ``car-trailers``: ``d1..dK``; ``car``: ``L``, ``rmin``;
+        ``snakeboard``: ``l``; ``kinematic-snake``: ``R``; ``space-robot``: all).
     """
     name, sep, arg = spec.partition(":")
     info = MODELS.get(name.strip())
@@ -251,7 +300,6 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                 f"model {spec!r} needs its argument: {info.usage} (e.g. {info.example_spec})"
             )
         system = info.build(_parse_argument(spec, info, arg))
-    system = with_builtin_constraints(system)  # outline and default limits (planning)
     if params:
         system = system.with_parameters(dict(params))
     if info.positive_parameters:
@@ -260,7 +308,7 @@ def get_model(spec: str, params: Mapping[str, object] | None = None) -> ControlS
                 raise ModelError(
                     f"model {spec!r}: parameter {key} must be a positive number, got {value}"
                 )
-    return system
+    return with_builtin_constraints(system)  # outline and default limits (planning)
 
 
 def _shown(text: str, limit: int = 200) -> str:
@@ -299,10 +347,10 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
     spec:
         A built-in spec (see :func:`get_model`) or a path to a model file in
         the ``INTERFACE.md`` format, read by
-        :func:`nilpotent.core.modelfile.load_model_file`.
+        :func:`nilpotent.core.model.modelfile.load_model_file`.
     params:
         Parameter values applied with
-        :meth:`~nilpotent.core.system.ControlSystem.with_parameters`.
+        :meth:`~nilpotent.core.model.system.ControlSystem.with_parameters`.
 
     Raises
     ------
@@ -322,7 +370,7 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
         )
     if problem is not None:
         raise ModelError(f"model file {_shown(spec)!r} {problem}")
-    from nilpotent.core.modelfile import load_model_file  # lazy: written alongside
+    from nilpotent.core.model.modelfile import load_model_file  # lazy: written alongside
 
     system = load_model_file(path)
     if params:

@@ -1,6 +1,6 @@
 """Classic driftless systems: unicycle, Heisenberg, Engel, Cartan, Martinet.
 
-Each builder returns a :class:`~nilpotent.core.system.ControlSystem`; the
+Each builder returns a :class:`~nilpotent.core.model.system.ControlSystem`; the
 docstring of each carries the derivation and the growth vector, stated in the
 project convention ``[X, Y] = DY·X − DX·Y`` (so ``[X, Y]f = X(Yf) − Y(Xf)``).
 These systems have no parameters.
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 
 __all__ = ["cartan", "engel", "heisenberg", "martinet", "unicycle"]
 

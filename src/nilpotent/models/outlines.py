@@ -27,14 +27,27 @@ rectangle from 0.2 behind to 0.3 ahead of ``P_i`` along ``θ_i``, 0.4 wide
 (model length units, independent of ``d_i``); each hitch is the segment
 ``P_i → P_{i−1}``.  No joint limits by default (relative angles are not
 coordinates; add ``--limit`` on any ``θ_i`` if needed).
+
+**Car** (``car``): :func:`~nilpotent.models.vehicles.car_outline`; default
+limit ``|φ| ≤ atan(L / rmin)`` from the model's own parameter values.
+**Snakeboard**, **kinematic snake**, **space robot**: their outlines
+(:mod:`nilpotent.models.vehicles`), no default limits.  **Rigid body**: no
+outline, ``|pitch| ≤ 17π/36``.
 """
 
 from __future__ import annotations
 
 import sympy as sp
 
-from nilpotent.core.outline import Limits, Outline
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Limits, Outline
+from nilpotent.core.model.system import ControlSystem
+from nilpotent.models.groups import PITCH_LIMIT
+from nilpotent.models.vehicles import (
+    car_outline,
+    snake_outline,
+    snakeboard_outline,
+    space_robot_outline,
+)
 
 __all__ = [
     "CAR_SIZE",
@@ -108,8 +121,10 @@ def with_builtin_constraints(system: ControlSystem) -> ControlSystem:
     """The built-in ``system`` with its outline and default limits attached (if it has any).
 
     Trident forms (by name): :func:`trident_outline` and ``|φ_i| ≤ 5π/6``;
-    ``car-trailers:K``: :func:`car_trailers_outline`.  Other systems are
-    returned unchanged.
+    ``car-trailers:K``: :func:`car_trailers_outline`; ``car``, ``snakeboard``,
+    ``kinematic-snake``, ``rigid-body``: see the module doc (the car's limit is
+    computed from its parameter values, so apply them first).  Other systems
+    are returned unchanged.
     """
     from dataclasses import replace
 
@@ -125,4 +140,18 @@ def with_builtin_constraints(system: ControlSystem) -> ControlSystem:
         ))
     if name.startswith("car-trailers:"):
         return replace(system, geometry=car_trailers_outline(coords))
+    if name == "car":
+        values = system.parameter_values
+        bound = float(sp.atan(values["L"] / values["rmin"]))
+        return replace(system, limits=Limits((("phi", -bound, bound),)),
+                       geometry=car_outline(coords))
+    if name == "snakeboard":
+        return replace(system, geometry=snakeboard_outline(coords))
+    if name == "kinematic-snake":
+        return replace(system, geometry=snake_outline(coords))
+    if name == "space-robot":
+        return replace(system, geometry=space_robot_outline(coords))
+    if name == "rigid-body":
+        pitch = float(PITCH_LIMIT)
+        return replace(system, limits=Limits((("pitch", -pitch, pitch),)))
     return system

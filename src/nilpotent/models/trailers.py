@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError
 
 __all__ = ["car_trailers", "hitch_parameter_names"]

@@ -20,7 +20,7 @@ from nilpotent.numeric.compile import compile_fields as compile_fields
 from nilpotent.numeric.compile import compile_map as compile_map
 from nilpotent.numeric.compile import compile_system as compile_system
 from nilpotent.numeric.engines import ENGINES as ENGINES
-from nilpotent.numeric.engines import Engine as Engine
+from nilpotent.numeric.engines.base import Engine as Engine
 from nilpotent.numeric.integrate import METHODS as METHODS
 from nilpotent.numeric.integrate import BatchSolution as BatchSolution
 from nilpotent.numeric.integrate import Status as Status

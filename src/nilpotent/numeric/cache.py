@@ -15,10 +15,16 @@ repaired: files may have been planted while it was open). And a file is
 imported only if its content is byte for byte what this process generated
 (SHA-256 compared); otherwise it is rewritten first.
 
-A file's name carries a hash of everything it was generated from, so a file
-is never stale: a change of expressions, generator or library version gives a
-new name.  Files are written whole (temporary file + rename), so concurrent
-processes never see half a file.
+A file's name carries a hash of everything it was generated from (the
+expressions with the coordinates renamed ``q0..``, parameters substituted; never
+the model's name, which appears nowhere in the text either), so a file is never
+stale and a renamed model reuses it: a change of expressions, generator or
+library version gives a new name.  Files are written whole (temporary file +
+rename), so concurrent processes never see half a file.
+
+A library that keeps compiled native code on disk itself (heyoka's LLVM object
+code) gets a subfolder of this one (:func:`library_cache`) under the same
+policy, never its own default folder; when none is safe its disk cache is off.
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ import stat
 import sys
 import tempfile
 import warnings
+from collections import Counter
 from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
@@ -41,6 +48,10 @@ from types import ModuleType
 GENERATOR_VERSION = "2"
 
 _private: dict[str, Path] = {}  # the private folder and the folder already warned about
+
+#: Counts of this process: ``"written"`` generated files (re)written, ``"reused"``
+#: files found holding exactly the generated text (a test hook: reuse is observable).
+STATS: Counter[str] = Counter()
 
 
 def safe_folder(folder: Path) -> str | None:
@@ -123,6 +134,69 @@ def cache_dir() -> Path:
     return _private_folder()
 
 
+def is_private(folder: Path) -> bool:
+    """Whether ``folder`` is this process's private folder (no cache between runs)."""
+    return folder == _private.get("dir")
+
+
+def _unsafe_entry(folder: Path) -> str | None:
+    """Why some entry of ``folder`` must not be trusted (``None``: every entry is safe).
+
+    Each entry must be the user's own, not a symbolic link, not writable by
+    group or others (a file planted or made writable there could be loaded as code).
+    """
+    try:
+        entries = list(os.scandir(folder))
+    except OSError as exc:
+        return f"cannot list it ({exc.strerror})"
+    for entry in entries:
+        try:
+            info = os.lstat(entry.path)
+        except OSError as exc:
+            return f"cannot inspect {entry.name} ({exc.strerror})"
+        if stat.S_ISLNK(info.st_mode):
+            return f"it holds a symbolic link ({entry.name})"
+        if hasattr(os, "getuid") and info.st_uid != os.getuid():
+            return f"it holds {entry.name}, owned by another user (uid {info.st_uid})"
+        if info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+            return (f"it holds {entry.name}, writable by others "
+                    f"(mode {stat.S_IMODE(info.st_mode):o})")
+    return None
+
+
+def library_cache(name: str) -> tuple[Path | None, str]:
+    """A folder for a library's own on-disk cache of compiled code: ``<cache>/<name>``.
+
+    Under the policy of :func:`cache_dir`: created with mode 0700 inside the
+    (safe) cache folder, owned by the user, not writable by group or others, and
+    every entry in it the user's own, no symbolic link, not writable by others.
+
+    Parameters
+    ----------
+    name : str
+        The subfolder's name (e.g. ``"heyoka"``).
+
+    Returns
+    -------
+    tuple of (Path or None, str)
+        The folder and ``""``; or ``None`` and why there is none (the code cache
+        itself falls back to a private folder, or the subfolder is not safe):
+        the library must then keep no disk cache.
+    """
+    base = cache_dir()
+    if is_private(base):
+        return None, "the code cache folder is not usable (no cache between runs)"
+    folder = base / name
+    try:
+        folder.mkdir(mode=0o700, exist_ok=True)
+    except OSError as exc:
+        return None, f"{folder} cannot be created ({exc.strerror})"
+    why = safe_folder(folder) or _unsafe_entry(folder)
+    if why is None and not os.access(folder, os.W_OK | os.X_OK):
+        why = "it is not writable"
+    return (None, f"{folder}: {why}") if why else (folder, "")
+
+
 def content_key(*parts: str) -> str:
     """A short hex digest of ``parts`` (plus the generator version)."""
     digest = hashlib.sha256()
@@ -185,7 +259,10 @@ def load_generated_module(
     data = text.encode("utf-8")
     folder = cache_dir()
     path = folder / f"{stem}.py"
-    if not _matches(path, data):
+    if _matches(path, data):
+        STATS["reused"] += 1
+    else:
+        STATS["written"] += 1
         with contextlib.suppress(OSError):
             _write(folder, path, stem, data)
         if not _matches(path, data):

@@ -15,8 +15,9 @@ method        engines                     accuracy reported (``tolerance``)
 
 ``engine="auto"`` (:func:`~nilpotent.numeric.engines.choose_engine`): for the
 adaptive method, ``heyoka`` when the batch has at least
-:data:`~nilpotent.numeric.engines.AUTO_NUMBA_BATCH` trajectories (and heyoka is
-installed, as it is by default); otherwise ``numba`` when its kernels are
+:data:`~nilpotent.numeric.engines.AUTO_NUMBA_BATCH` trajectories or the inputs
+run through at least :data:`~nilpotent.numeric.engines.HEYOKA_MIN_CYCLES`
+periods (and heyoka is installed, as it is by default); otherwise ``numba`` when its kernels are
 already in the on-disk cache or the batch is that large, else ``scipy``
 (adaptive) / ``numpy`` (fixed).
 
@@ -37,8 +38,9 @@ import numpy as np
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import CompiledSystem
 from nilpotent.numeric.engines import ENGINES as ENGINES
-from nilpotent.numeric.engines import Status as Status
-from nilpotent.numeric.engines import check_times, choose_engine, engine_names
+from nilpotent.numeric.engines import choose_engine, engine_names, input_cycles
+from nilpotent.numeric.engines.base import Status as Status
+from nilpotent.numeric.engines.base import check_times
 from nilpotent.numeric.engines.numba_engine import kernels_cached as kernels_cached
 from nilpotent.numeric.engines.scipy_engine import solve_function_input as solve_function_input
 from nilpotent.numeric.signals import Signal
@@ -208,7 +210,7 @@ def integrate(
         raise OptionError("max_steps must be >= 1 and bound > 0")
     if min_step is None:
         min_step = 1e-13 * float(np.max(total)) if batch else 0.0
-    chosen = choose_engine(system, method, engine, batch)
+    chosen = choose_engine(system, method, engine, batch, input_cycles(sig))
     chosen.require()
     adaptive = method == "adaptive"
     if batch == 0:  # nothing to integrate: an empty solution of the right shapes

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PlanningError
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.global_planner import (

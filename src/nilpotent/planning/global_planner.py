@@ -45,9 +45,14 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.core.outline import Limits
-from nilpotent.core.system import ControlSystem
-from nilpotent.errors import IntegrationError, PlanningError, SingularPointError
+from nilpotent.core.model.outline import Limits
+from nilpotent.core.model.system import ControlSystem
+from nilpotent.errors import (
+    ComputationLimitError,
+    IntegrationError,
+    PlanningError,
+    SingularPointError,
+)
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
@@ -75,6 +80,8 @@ MAX_PIECE = 1.0
 SIMPLIFY_SECONDS = 0.5
 #: Pieces are not halved below this length: then planning fails.
 MIN_PIECE = 1e-3
+#: Most pieces a global path is cut into (each is steered on its own, in 0.1-1 s).
+MAX_PIECES = 10_000
 #: Samples per segment when a piece's motion is checked, and when the whole plan is verified.
 CHECK_POINTS = 40
 VERIFY_POINTS = 100
@@ -153,7 +160,7 @@ class GlobalPlan:
         ``clearance``, ``limits_ok``, ``min_singular_margin`` and more; no NaN/Infinity
         (undefined numbers are null, ``null_reasons`` says why)."""
         v = self.verification
-        out = self.plan.to_json()
+        out = self.plan.json_fields()
         reasons: dict[str, str] = {}
         if v.clearance is None:
             reasons["clearance"] = "no world given: no obstacles to measure against"
@@ -359,6 +366,13 @@ def shape_held_path(
 
 
 def _densify(points: Sequence[np.ndarray], max_piece: float) -> list[np.ndarray]:
+    count = sum(math.ceil(float(np.linalg.norm(b - a)) / max_piece)
+                for a, b in itertools.pairwise(points))
+    if count > MAX_PIECES:
+        raise ComputationLimitError(
+            f"the global path would be cut into {count:,} pieces of at most --max-piece "
+            f"{max_piece:g}, above the limit {MAX_PIECES:,}; raise --max-piece or bring the "
+            "goal closer")
     out = [points[0]]
     for a, b in itertools.pairwise(points):
         k = max(1, math.ceil(float(np.linalg.norm(b - a)) / max_piece))

@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NilpotentError, PlanningError, SingularPointError
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import (
@@ -48,6 +48,7 @@ from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, 
 from nilpotent.planning.nilpotent import steer_nilpotent
 from nilpotent.planning.simulation import simulate_candidates, simulate_plan, single_engine
 from nilpotent.simulation.trajectory import Trajectory
+from nilpotent.strict_json import json_object
 
 ANCHORS = ("current", "goal", "start")
 #: Relative finite-difference step of the shooting refinement's Jacobian.
@@ -158,7 +159,18 @@ class Plan:
         return plot_plan(self)
 
     def to_json(self) -> dict[str, Any]:
-        """The ``nilpotent/plan@1`` object of INTERFACE.md (plus extra fields)."""
+        """The ``nilpotent/plan@1`` object of INTERFACE.md (plus extra fields), strict JSON.
+
+        Numbers that are not finite (the homogeneous ``distance`` of a Newton
+        refinement step, which computes none) are ``null`` and listed under
+        ``"undefined"`` (:func:`nilpotent.strict_json.json_object`), so
+        ``json.dumps(plan.to_json(), allow_nan=False)`` always works.
+        """
+        return json_object(self.json_fields())
+
+    def json_fields(self) -> dict[str, Any]:
+        """The fields of :meth:`to_json` before the strict encoding (floats may be NaN):
+        what :class:`~nilpotent.planning.global_planner.GlobalPlan` extends."""
         return {
             "schema": "nilpotent/plan@1",
             "model": self.system.name,
@@ -421,7 +433,7 @@ def plan(
           first brackets span the space (step ≤ 2), else ``"start"``.
     builder:
         ``"numeric"`` (step ≤ 2, float linear adapted coordinates),
-        ``"symbolic"`` (:func:`nilpotent.core.approximation.approximate`,
+        ``"symbolic"`` (:func:`nilpotent.core.coordinates.approximation.approximate`,
         exact) or ``"auto"`` (numeric where possible).
     method:
         Nilpotent steering method (:data:`nilpotent.planning.nilpotent.METHODS`

@@ -22,7 +22,7 @@ Two builders (registry :data:`BUILDERS`):
     redone at every iterate.
 
 ``"symbolic"`` (any step)
-    :func:`nilpotent.core.approximation.approximate` at the point (exact
+    :func:`nilpotent.core.coordinates.approximation.approximate` at the point (exact
     symbolic work, cached per point), its fields converted to floats and its
     coordinate maps compiled by :func:`nilpotent.numeric.compile.compile_map`.
 
@@ -41,7 +41,7 @@ from functools import lru_cache
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NotBracketGeneratingError, PlanningError, SingularPointError
 from nilpotent.numeric.compile import CompiledSystem, compile_map, compile_system
 from nilpotent.numeric.types import State
@@ -80,7 +80,7 @@ class LocalModel:
 
 
 def _rank(mat: np.ndarray) -> int:
-    from nilpotent.core.spans import numeric_rank  # the one rank engine (scale-invariant)
+    from nilpotent.core.decide.spans import numeric_rank  # the one rank engine (scale-invariant)
 
     return numeric_rank(mat.T.tolist(), RANK_TOL) if mat.size else 0
 
@@ -230,7 +230,7 @@ def exact_point(point: Sequence[object] | State) -> tuple[sp.Expr, ...]:
 
 
 def symbolic_model(system: ControlSystem, point: Sequence[object] | State) -> LocalModel:
-    """The nilpotent approximation of :func:`nilpotent.core.approximation.approximate` at ``point``.
+    """The nilpotent approximation (:func:`nilpotent.core.coordinates.approximate`) at ``point``.
 
     The point is made exact (:func:`exact_point`) and the symbolic work is
     cached per (system, point); the result is converted to a
@@ -241,7 +241,7 @@ def symbolic_model(system: ControlSystem, point: Sequence[object] | State) -> Lo
 
 @lru_cache(maxsize=32)
 def _symbolic_model(system: ControlSystem, point: tuple[sp.Expr, ...]) -> LocalModel:
-    from nilpotent.core.approximation import approximate
+    from nilpotent.core.coordinates.approximation import approximate
 
     approx = approximate(system, point)
     filt = approx.filtration

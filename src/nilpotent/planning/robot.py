@@ -1,6 +1,6 @@
 """A robot's outline evaluated at configurations: shapely geometries, limits, singular margin.
 
-:class:`Robot` compiles a system's :class:`~nilpotent.core.outline.Outline`
+:class:`Robot` compiles a system's :class:`~nilpotent.core.model.outline.Outline`
 (parameters substituted) with ``sympy.lambdify`` (the expressions came from
 the safe grammar or the built-ins) and turns arrays of configurations
 ``(N, n)`` into shapely 2 geometries, vectorised (``shapely.polygons``,
@@ -25,10 +25,10 @@ import numpy as np
 import shapely
 import sympy as sp
 
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.outline import Limits, Outline
-from nilpotent.core.system import ControlSystem
-from nilpotent.errors import OptionError
+from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.outline import Limits, Outline
+from nilpotent.core.model.system import ControlSystem
+from nilpotent.errors import ModelError, OptionError
 
 __all__ = ["OutlinePoints", "Robot", "singular_margin_function"]
 
@@ -107,13 +107,50 @@ class Robot:
         return self._fn is not None
 
     def _values(self, q: np.ndarray) -> np.ndarray:
-        """All outline expressions at ``q (N, n)``: shape ``(N, E)``."""
+        """All outline expressions at ``q (N, n)``: shape ``(N, E)``.
+
+        Raises
+        ------
+        ModelError
+            An expression that is not finite at one of the configurations (``1/x`` at
+            ``x = 0``, ``log(x)`` at ``x <= 0``), or a disc radius below 0: the message
+            names the expression and the configuration.
+        """
         assert self._fn is not None
-        vals = self._fn(q.T)
-        out = np.empty((q.shape[0], len(vals)))
-        for i, v in enumerate(vals):
-            out[:, i] = v  # constants (e.g. a disc's radius) broadcast
+        with np.errstate(all="ignore"):
+            try:
+                vals = self._fn(q.T)
+            except (ZeroDivisionError, OverflowError, ValueError, TypeError) as exc:
+                raise ModelError(f"model {self.system.name}: the outline [geometry] cannot be "
+                                 f"evaluated ({type(exc).__name__}: {exc})") from None
+            out = np.empty((q.shape[0], len(vals)))
+            for i, v in enumerate(vals):
+                out[:, i] = v  # constants (a disc's radius) broadcast
+        bad = ~np.isfinite(out)
+        if bad.any():
+            row, col = (int(k[0]) for k in np.nonzero(bad))
+            self._refuse(q[row], col, f"is not finite ({out[row, col]})")
+        outline = self.outline
+        assert outline is not None
+        if outline.discs:
+            radius_cols = np.arange(out.shape[1] - 3 * len(outline.discs) + 2, out.shape[1], 3)
+            negative = out[:, radius_cols] < 0
+            if negative.any():
+                row, k = (int(v[0]) for v in np.nonzero(negative))
+                col = int(radius_cols[k])
+                self._refuse(q[row], col, f"is negative ({out[row, col]:.6g}); a radius is >= 0")
         return out
+
+    def _refuse(self, q: np.ndarray, col: int, why: str) -> None:
+        outline = self.outline
+        assert outline is not None
+        label = outline.labels()[col]
+        expr = as_expr(outline.expressions()[col])
+        at = ", ".join(f"{n}={float(v):.6g}" for n, v in zip(self.system.coordinate_names, q,
+                                                             strict=True))
+        raise ModelError(f"model {self.system.name}: the outline expression {label} = {expr} "
+                         f"{why} at {at}; give an outline defined at every configuration "
+                         "the robot may take")
 
     def parts(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Shapely geometries ``(N, P)`` of the outline's parts and their radii ``(N, P)``.

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import IntegrationError
 from nilpotent.numeric.engines import choose_engine
 from nilpotent.numeric.integrate import Status, integrate

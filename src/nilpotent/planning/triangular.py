@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr
 from nilpotent.errors import PlanningError
 
 Term = tuple[float, tuple[int, ...]]  # (coefficient, exponent of y_1..y_n)

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nilpotent.core.outline import Limits
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.outline import Limits
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
@@ -147,7 +147,7 @@ class Checker:
         """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""
         clear, lim, sing = (float(v[0]) for v in self.measures(np.asarray(q)[None, :]))
         reasons = []
-        if clear <= self.clearance:
+        if not clear > self.clearance:  # NaN: not seen as free
             reasons.append(f"it touches an obstacle or leaves the bounds (clearance {clear:.3g})")
         if lim < 0:
             names = self.system.coordinate_names

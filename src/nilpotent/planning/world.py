@@ -11,7 +11,15 @@ A world file (INTERFACE.md, ``docs/worlds.md``)::
     [[obstacles]]
     disc = { center = [3.0, -0.5], radius = 0.4 }
 
-Numbers may be constant expressions of the safe grammar (``"sqrt(2)"``).
+Numbers may be constant expressions of the safe grammar (``"sqrt(2)"``).  A world
+file is read like a model file (:func:`nilpotent.core.model.datafile.read_data_file`:
+TOML or the same structure as JSON by its suffix, a UTF-8 byte-order mark read
+past, a JSON key given twice refused, only regular files of at most 1 MB).
+Every number is finite and of magnitude at most
+:data:`nilpotent.core.model.points.MAX_MAGNITUDE` (1e6); a disc's radius is in
+``(0, 1e6]``; a world has at most :data:`MAX_OBSTACLES` obstacles and a polygon at
+most :data:`MAX_POLYGON_VERTICES` vertices (a
+:class:`~nilpotent.errors.ComputationLimitError` past them, naming the file).
 
 Collision checks are shapely 2's vectorised predicates and distances: the
 polygon obstacles and, when bounds are given, the outside of the bounds (a
@@ -24,7 +32,6 @@ radius: ``≤ 0`` means contact or overlap.
 
 from __future__ import annotations
 
-import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -35,10 +42,24 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
-from nilpotent.core.expressions import parse_expression, real_value
-from nilpotent.errors import ExpressionError, WorldError
+from nilpotent.core.model.datafile import read_data_file
+from nilpotent.core.model.expressions import parse_expression, real_value
+from nilpotent.core.model.points import MAX_MAGNITUDE, check_magnitude
+from nilpotent.errors import ComputationLimitError, ExpressionError, WorldError
+from nilpotent.strict_json import json_object
 
-__all__ = ["World", "load_world", "world_from_dict"]
+__all__ = [
+    "MAX_OBSTACLES", "MAX_POLYGON_VERTICES", "World", "builtin_worlds", "load_world",
+    "world_from_dict",
+]
+
+#: Most obstacles of a world (each is checked against every part of the robot at every
+#: validity check of the planner).
+MAX_OBSTACLES = 1000
+#: Most vertices of one obstacle polygon.
+MAX_POLYGON_VERTICES = 1000
+#: Longest world name, in characters (as a model's name).
+MAX_NAME_LENGTH = 200
 
 #: How far beyond the bounds the frame polygon (the outside of the workspace) reaches,
 #: as a multiple of the workspace's size.
@@ -145,27 +166,36 @@ class World:
             out["bounds"] = {"x": list(self.bounds[0]), "y": list(self.bounds[1])}
         out["obstacles"] = [{"polygon": [list(p) for p in poly]} for poly in self.polygons]
         out["obstacles"] += [{"disc": {"center": list(c), "radius": r}} for c, r in self.discs]
-        return out
+        return json_object(out)
 
 
-def _number(value: object, where: str) -> float:
+def _show(value: object, limit: int = 60) -> str:
+    if isinstance(value, int) and value.bit_length() > 64:
+        return f"an integer of about {int(value.bit_length() * 0.30103) + 1} digits"
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+def _number(value: object, where: str, low: float = -MAX_MAGNITUDE) -> float:
+    """A finite number of the world file within ``[low, MAX_MAGNITUDE]``."""
     if isinstance(value, bool) or not isinstance(value, int | float | str):
-        raise WorldError(f"{where}: expected a number, got {value!r}")
+        raise WorldError(f"{where}: expected a number, got {_show(value)}")
     if isinstance(value, str):
         try:
             v = real_value(parse_expression(value, {}, where=where), where=where)
         except ExpressionError as exc:
             raise WorldError(str(exc)) from None
+    elif isinstance(value, int) and value.bit_length() > 64:
+        raise WorldError(f"{where}: {_show(value)}, outside the allowed range "
+                         f"[{low:g}, {MAX_MAGNITUDE:g}]")
     else:
-        v = float(value)
-    if not math.isfinite(v):
-        raise WorldError(f"{where}: expected a finite number, got {value!r}")
-    return v
+        v = value
+    return check_magnitude(v, where, low=low, error=WorldError)
 
 
 def _pair(value: object, where: str) -> tuple[float, float]:
     if not isinstance(value, list) or len(value) != 2:
-        raise WorldError(f"{where}: expected a pair [a, b], got {value!r}")
+        raise WorldError(f"{where}: expected a pair [a, b], got {_show(value)}")
     return (_number(value[0], f"{where}[0]"), _number(value[1], f"{where}[1]"))
 
 
@@ -176,7 +206,11 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
     ------
     WorldError
         Unknown keys, malformed bounds (``lo ≥ hi``), polygons with fewer than
-        3 points or self-intersecting, discs with a non-positive radius.
+        3 points or self-intersecting, discs with a non-positive radius, a number
+        that is not finite or of magnitude above 1e6.
+    ComputationLimitError
+        More than :data:`MAX_OBSTACLES` obstacles or :data:`MAX_POLYGON_VERTICES`
+        vertices in a polygon.
     """
     if not isinstance(data, Mapping):
         raise WorldError(f"{source}: a world is a table with name, bounds, obstacles")
@@ -186,6 +220,9 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
     name = data.get("name", Path(source).stem if not source.startswith("<") else "world")
     if not isinstance(name, str) or not name:
         raise WorldError(f"{source}: name must be a non-empty string")
+    if len(name) > MAX_NAME_LENGTH:
+        raise WorldError(f"{source}: name has {len(name):,} characters, above the limit "
+                         f"{MAX_NAME_LENGTH} of a world's name")
     bounds = None
     if "bounds" in data:
         raw = data["bounds"]
@@ -200,6 +237,11 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
     obstacles = data.get("obstacles", [])
     if not isinstance(obstacles, list):
         raise WorldError(f"{source}: obstacles must be a list of [[obstacles]] tables")
+    if len(obstacles) > MAX_OBSTACLES:
+        raise ComputationLimitError(
+            f"{source}: {len(obstacles):,} obstacles, above the limit {MAX_OBSTACLES:,} of a "
+            "world (nilpotent.planning.world.MAX_OBSTACLES); merge small obstacles into "
+            "polygons")
     for i, ob in enumerate(obstacles):
         where = f"{source}: obstacles[{i}]"
         if not isinstance(ob, Mapping) or len(ob) != 1 or next(iter(ob)) not in ("polygon", "disc"):
@@ -208,12 +250,16 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
             pts = ob["polygon"]
             if not isinstance(pts, list) or len(pts) < 3:
                 raise WorldError(f"{where}.polygon: needs at least 3 points [x, y]")
+            if len(pts) > MAX_POLYGON_VERTICES:
+                raise ComputationLimitError(
+                    f"{where}.polygon: {len(pts):,} vertices, above the limit "
+                    f"{MAX_POLYGON_VERTICES:,} (nilpotent.planning.world.MAX_POLYGON_VERTICES)")
             polygons.append(tuple(_pair(p, f"{where}.polygon[{j}]") for j, p in enumerate(pts)))
         else:
             d = ob["disc"]
             if not isinstance(d, Mapping) or set(d) != {"center", "radius"}:
                 raise WorldError(f"{where}.disc: needs exactly center = [x, y] and radius")
-            radius = _number(d["radius"], f"{where}.disc.radius")
+            radius = _number(d["radius"], f"{where}.disc.radius", low=0.0)
             if radius <= 0:
                 raise WorldError(f"{where}.disc.radius must be > 0, got {radius}")
             discs.append((_pair(d["center"], f"{where}.disc.center"), radius))
@@ -223,29 +269,58 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
         raise WorldError(f"{source}: {exc}") from None
 
 
+def builtin_worlds() -> dict[str, Any]:
+    """The example worlds shipped with the package, by name (``room``, ``parking``).
+
+    Returns
+    -------
+    dict
+        Name -> the world file (an :class:`importlib.resources.abc.Traversable`).
+    """
+    from importlib.resources import files
+
+    folder = files("nilpotent.planning") / "worlds"
+    return {
+        f.name.removesuffix(".toml"): f
+        for f in sorted(folder.iterdir(), key=lambda f: f.name)
+        if f.name.endswith(".toml")
+    }
+
+
 def load_world(path: str | Path) -> World:
-    """Read a TOML world file (module doc).
+    """Read a world file, TOML or JSON (module doc), as model files are read, or a
+    shipped example world by name.
 
     Parameters
     ----------
     path : str or Path
-        The world file (TOML).
+        The world file (``.toml``, or ``.json`` with the same structure), or the name
+        of a world of :func:`builtin_worlds` (``"room"``): a name is looked up only
+        where no file of that name exists.
 
     Raises
     ------
     WorldError
-        Missing or unreadable file, TOML syntax error, or what
+        Missing, unreadable or non-regular file (a FIFO, a device: refused before
+        reading), unknown suffix, syntax error, a duplicate JSON key, or what
         :func:`world_from_dict` reports.
+    ComputationLimitError
+        A file above 1 MB, or a world past the limits of :func:`world_from_dict`.
     """
     path = Path(path)
+    builtin = builtin_worlds()
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise WorldError(f"{path}: world file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise WorldError(f"{path}: cannot read the world file ({exc})") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise WorldError(f"{path}: TOML syntax error: {exc}") from None
+        exists = path.exists()
+    except (OSError, ValueError):  # a name too long, a NUL byte: read_data_file says so
+        exists = True
+    if not exists:
+        if str(path) in builtin:
+            text = builtin[str(path)].read_text("utf-8")
+            return world_from_dict(tomllib.loads(text), str(path))
+        names = ", ".join(builtin)
+        raise WorldError(
+            f"{path}: world file not found (a path to a .toml or .json file, or a built-in "
+            f"world: {names})"
+        )
+    data = read_data_file(path, "world file", WorldError)
     return world_from_dict(data, str(path))

@@ -18,7 +18,7 @@ from typing import Any
 
 import sympy as sp
 
-from nilpotent.core.expressions import parse_expression
+from nilpotent.core.model.expressions import parse_expression
 from nilpotent.errors import NilpotentError
 from nilpotent.models.trident import BODY_LEG_ANGLES, PAPER_LEG_ANGLES
 from nilpotent.report.audit import Audit
@@ -376,7 +376,7 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
         f"<p>Amplitudes A = {amps}; one period of the periodic input; error between the "
         "original system (mapped to the privileged coordinates y) and the approximation "
         "(integrated in y), largest over the period and over the coordinates of each weight "
-        "(nilpotent.simulate.scaling_study). Theory (first-order approximation): O(A^(w+1)) "
+        "(nilpotent.scaling). Theory (first-order approximation): O(A^(w+1)) "
         "for coordinates of weight w. Slopes are least-squares fits on log–log axes.</p>"
         + _fig(scaling_stems["vf"], "Error against amplitude, eq. vf")
         + _fig(scaling_stems["body"], "Error against amplitude, Section 4 robot")

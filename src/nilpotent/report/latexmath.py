@@ -3,8 +3,8 @@
 The audit reads the paper's formulas from its LaTeX source (shipped as
 ``report/assets/paper.tex``) instead of copying them by hand.  This module turns
 a LaTeX math fragment into *text of the safe expression grammar*
-(:mod:`nilpotent.core.expressions`), which
-:func:`~nilpotent.core.expressions.parse_expression` then turns into sympy.
+(:mod:`nilpotent.core.model.expressions`), which
+:func:`~nilpotent.core.model.expressions.parse_expression` then turns into sympy.
 Nothing here evaluates anything: it is a tokenizer and a recursive-descent
 parser that re-prints what it reads.
 
@@ -303,7 +303,7 @@ def latex_to_grammar(tex: str, symbols: Mapping[str, str]) -> str:
     Returns
     -------
     str
-        Text that :func:`nilpotent.core.expressions.parse_expression` parses.
+        Text that :func:`nilpotent.core.model.expressions.parse_expression` parses.
     """
     return _Parser(tex, symbols).parse()
 

@@ -6,7 +6,7 @@ robot controlling distribution*) ships with the package as
 checkable formula in that source (by its ``\label``, or by the unique text
 around it), translates it with :mod:`nilpotent.report.latexmath` into the
 expression grammar and parses it with
-:func:`nilpotent.core.expressions.parse_expression`.  The audit
+:func:`nilpotent.core.model.expressions.parse_expression`.  The audit
 (:mod:`nilpotent.report.audit`) compares these printed values with computed
 ones; nothing here decides whether the paper is right.
 
@@ -27,7 +27,7 @@ from importlib import resources
 
 import sympy as sp
 
-from nilpotent.core.expressions import parse_expression
+from nilpotent.core.model.expressions import parse_expression
 from nilpotent.errors import ExpressionError
 from nilpotent.report.latexmath import (
     PARTIAL_PREFIX,

@@ -6,9 +6,10 @@ r"""``reproduce``: the paper's pipeline end to end, written as an offline web pa
    statement of the paper against a computation;
 2. the two models — ``trident-snake`` (body-velocity inputs, the paper's
    Section 4, ``r = l = 1``) and ``trident-snake-paper`` (its eq. ``vf``) — with
-   their growth vector, weights and adapted frame (:func:`~nilpotent.core.filtration.analyze`);
+   their growth vector, weights and adapted frame
+    (:func:`~nilpotent.core.analysis.filtration.analyze`);
 3. privileged coordinates and the nilpotent approximation of each
-   (:func:`~nilpotent.core.approximation.approximate`), in ``y`` and in ``x``;
+   (:func:`~nilpotent.core.coordinates.approximation.approximate`), in ``y`` and in ``x``;
 4. the bracket motions of Figs 2–4 (Section 4 robot) and the comparisons of
    Figs 5–7 (eq. vf against its approximation, as in the paper; the Section 4
    robot against its approximation as well), with animations of the robot;
@@ -62,9 +63,10 @@ from nilpotent.report.reproduction_data import (
     ReproductionData,
     Settings,
 )
+from nilpotent.strict_json import json_object
 
 if TYPE_CHECKING:
-    from nilpotent.core.system import ControlSystem
+    from nilpotent.core.model.system import ControlSystem
     from nilpotent.report.audit import Audit
 
 __all__ = [
@@ -128,7 +130,7 @@ class Reproduction:
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/reproduce@1`` summary that ``nilpotent reproduce --json`` prints."""
-        return {
+        return json_object({
             "schema": "nilpotent/reproduce@1",
             "out": str(self.out_dir),
             "index": str(self.index),
@@ -142,18 +144,18 @@ class Reproduction:
             "slopes": self.slopes,
             "seconds": round(self.seconds, 3),
             "timings": {k: round(v, 3) for k, v in self.timings.items()},
-        }
+        })
 
 
 # --- formatting ----------------------------------------------------------------------
 def _fmt(value: Any) -> str:
-    from nilpotent.core.expressions import format_expression
+    from nilpotent.core.model.expressions import format_expression
 
     return format_expression(sp.S(value))
 
 
 def _model_payload(system, filtration, approx) -> dict[str, Any]:
-    from nilpotent.core.brackets import format_word
+    from nilpotent.core.lie.brackets import format_word
 
     coords = system.coordinate_names
     cert = approx.certificate
@@ -376,7 +378,7 @@ def _audit_paper() -> tuple[Any, Audit]:
 
 def _analyse_models() -> tuple[dict[str, ControlSystem], dict[str, Any]]:
     """The two models (``r = l = 1`` for the Section 4 fields) and their filtrations at 0."""
-    from nilpotent.core.filtration import analyze
+    from nilpotent.core.analysis.filtration import analyze
     from nilpotent.models import get_model
 
     systems = {
@@ -388,7 +390,7 @@ def _analyse_models() -> tuple[dict[str, ControlSystem], dict[str, Any]]:
 
 def _approximate_models(systems: dict[str, ControlSystem]) -> dict[str, Any]:
     """Privileged coordinates and the nilpotent approximation of each model."""
-    from nilpotent.core.approximation import approximate
+    from nilpotent.core.coordinates.approximation import approximate
 
     return {key: approximate(systems[key]) for key in MODEL_KEYS}
 
@@ -400,8 +402,8 @@ def _bracket_motions(
 
     Also the exact brackets ``[g_i, g_j](0)``.
     """
-    from nilpotent.core.brackets import word_values_at
-    from nilpotent.simulate import compare_bracket_motion
+    from nilpotent.core.lie.brackets import word_values_at
+    from nilpotent.simulation import compare_bracket_motion
 
     motions: dict[tuple[str, tuple[int, int]], Any] = {}
     brackets: dict[tuple[str, tuple[int, int]], tuple[sp.Expr, ...]] = {}
@@ -423,7 +425,7 @@ def _amplitude_study(
     systems: dict[str, ControlSystem], approximations: dict[str, Any], settings: Settings
 ) -> dict[tuple[str, tuple[int, int]], Any]:
     """Error of the approximation against amplitude, for every model and bracket."""
-    from nilpotent.simulate import scaling_study
+    from nilpotent.simulation import scaling_study
 
     return {
         (key, pair): scaling_study(

@@ -20,12 +20,12 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import sympy as sp
 
-    from nilpotent.core.approximation import NilpotentApproximation
-    from nilpotent.core.filtration import Filtration
-    from nilpotent.core.system import ControlSystem
+    from nilpotent.core.analysis.filtration import Filtration
+    from nilpotent.core.coordinates.approximation import NilpotentApproximation
+    from nilpotent.core.model.system import ControlSystem
     from nilpotent.report.audit import Audit
     from nilpotent.report.paper import PaperContent
-    from nilpotent.simulate import Comparison, ScalingStudy
+    from nilpotent.simulation import Comparison, ScalingStudy
     from nilpotent.viz import AnimationFiles
 
 __all__ = ["BRACKET_PAIRS", "MODEL_KEYS", "PageFigures", "ReproductionData", "Settings"]

@@ -1,7 +1,7 @@
 r"""The original system against its nilpotent approximation under one bracket motion.
 
 :func:`compare_bracket_motion` → :class:`Comparison`: the original system and
-its nilpotent approximation (:func:`nilpotent.core.approximation.approximate`)
+its nilpotent approximation (:func:`nilpotent.core.coordinates.approximation.approximate`)
 from the same point under the periodic bracket input, with the prediction
 $p + K\pi A^2 [X_I, X_J](p)$ and the errors per weight group in privileged
 coordinates.  Both run through the one pair engine
@@ -24,13 +24,14 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.points import format_point
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.points import format_point
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.integrate import Status
 from nilpotent.numeric.signals import bracket_inputs, bracket_signal, check_bracket
 from nilpotent.simulation.pair import CompiledPair, PairRun
 from nilpotent.simulation.trajectory import float_point
+from nilpotent.strict_json import json_object
 
 __all__ = ["Comparison", "bracket_run", "bracket_value", "compare_bracket_motion"]
 
@@ -67,8 +68,8 @@ def bracket_run(
 def bracket_value(
     system: ControlSystem, bracket: Sequence[int], point: Sequence[Any]
 ) -> np.ndarray:
-    r"""$[X_I, X_J](p)$ as floats (:func:`nilpotent.core.brackets.word_values_at`)."""
-    from nilpotent.core.brackets import word_values_at
+    r"""$[X_I, X_J](p)$ as floats (:func:`nilpotent.core.lie.brackets.word_values_at`)."""
+    from nilpotent.core.lie.brackets import word_values_at
 
     i, j = check_bracket(system.m, bracket)
     (values,) = word_values_at(system, [(i, j)], tuple(point))
@@ -84,7 +85,7 @@ class Comparison:
     system:
         The original system (parameters substituted).
     approximation:
-        The :class:`~nilpotent.core.approximation.NilpotentApproximation` used.
+        The :class:`~nilpotent.core.coordinates.approximation.NilpotentApproximation` used.
     point:
         $p$ (exact), the common start.
     bracket, amplitude, omega, periods:
@@ -149,7 +150,7 @@ class Comparison:
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/simulation@1`` object of INTERFACE.md (plus a few added fields)."""
-        return {
+        return json_object({
             "schema": "nilpotent/simulation@1",
             "model": self.system.name,
             "coordinates": list(self.system.coordinate_names),
@@ -173,7 +174,7 @@ class Comparison:
                 "by_weight_endpoint": {str(w): e for w, e in self.endpoint_by_weight.items()},
             },
             "tolerance": self.tolerance,
-        }
+        })
 
     def plot(self, fig: Any = None) -> tuple[Any, Any]:
         """Both trajectories (model coordinates) and the error per weight group against time.
@@ -218,7 +219,7 @@ def prepare_comparison(
     pair = check_bracket(sysp.m, bracket)
     pt = sysp.point(point) if point is not None else sysp.origin()
     if approximation is None:
-        from nilpotent.core.approximation import approximate
+        from nilpotent.core.coordinates.approximation import approximate
 
         approximation = approximate(sysp, pt)
     elif tuple(approximation.point) != tuple(pt):
@@ -253,7 +254,7 @@ def compare_bracket_motion(
     point:
         $p$ (sequence or name→value mapping of numbers; default the origin).
     approximation:
-        A :class:`~nilpotent.core.approximation.NilpotentApproximation` at
+        A :class:`~nilpotent.core.coordinates.approximation.NilpotentApproximation` at
         ``point`` (default: ``approximate(system, point)``).
     samples:
         Number of sample times (errors "along the way" are maxima over them).

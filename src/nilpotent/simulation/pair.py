@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.numeric.compile import (
     CompiledMap,
     CompiledSystem,
@@ -76,7 +76,7 @@ class CompiledPair:
     @classmethod
     def build(cls, system: ControlSystem, approximation: Any) -> CompiledPair:
         """Compile ``system`` (parameters substituted) and ``approximation``
-        (a :class:`~nilpotent.core.approximation.NilpotentApproximation` of it)."""
+        (a :class:`~nilpotent.core.coordinates.approximation.NilpotentApproximation` of it)."""
         sysp = system.specialized()
         coords = approximation.coordinates
         return cls(

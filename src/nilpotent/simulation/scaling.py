@@ -16,12 +16,13 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.points import format_point
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.points import format_point
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 from nilpotent.numeric.fits import loglog_slope
 from nilpotent.numeric.signals import bracket_signal, check_bracket
 from nilpotent.simulation.comparison import bracket_run, floats, prepare_comparison
+from nilpotent.strict_json import json_object
 
 __all__ = ["DEFAULT_AMPLITUDES", "ScalingStudy", "scaling_study"]
 
@@ -75,7 +76,7 @@ class ScalingStudy:
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/scaling@1`` JSON object."""
-        return {
+        return json_object({
             "schema": "nilpotent/scaling@1",
             "model": self.system.name,
             "coordinates": list(self.system.coordinate_names),
@@ -90,7 +91,7 @@ class ScalingStudy:
             "expected_slopes": {str(w): s for w, s in self.expected_slopes.items()},
             "floor": self.floor,
             "tolerance": self.tolerance,
-        }
+        })
 
     def plot(self, ax: Any = None) -> tuple[Any, Any]:
         """Log–log errors per weight group with the fitted lines; returns ``(figure, axes)``

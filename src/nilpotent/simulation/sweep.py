@@ -1,7 +1,7 @@
 r"""Parameter sweeps of bracket motions: the original system against its nilpotent approximation.
 
 One sample is one *pair* of trajectories under the periodic bracket input of
-:mod:`nilpotent.simulate` ($u_I = -A\omega\sin\omega t$, $u_J = A\omega\cos\omega t$,
+:mod:`nilpotent.numeric.signals` ($u_I = -A\omega\sin\omega t$, $u_J = A\omega\cos\omega t$,
 others 0, ``periods`` whole periods):
 
 * the original system from a start point $q_0$ near $p$ (model coordinates);
@@ -55,7 +55,7 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.integrate import METHODS
 from nilpotent.numeric.signals import bracket_inputs, check_bracket
@@ -168,7 +168,7 @@ def _run_chunk(chunk: _Chunk) -> dict[str, Any]:
 def _as_value(value: Any, where: str) -> sp.Expr:
     """A parameter value: sympy numbers and Python numbers as they are, text through the grammar."""
     if isinstance(value, str):
-        from nilpotent.core.expressions import parse_expression
+        from nilpotent.core.model.expressions import parse_expression
 
         expr = parse_expression(value, {}, where=where)
     elif isinstance(value, sp.Expr):
@@ -231,7 +231,7 @@ def _ball(rng: np.random.Generator, count: int, n: int, radius: float) -> np.nda
 
 
 def sweep(
-    system: ControlSystem,
+    sys: ControlSystem,
     brackets: Sequence[int] | Sequence[Sequence[int]],
     amplitudes: Sequence[float] = DEFAULT_AMPLITUDES,
     *,
@@ -252,12 +252,14 @@ def sweep(
     chunk_size: int = 4096,
     dask: Any = None,
     progress: Callable[[int, int], None] | None = None,
+    dask_connect_timeout: float | None = None,
+    dask_progress_timeout: float | None = None,
 ) -> SweepResult:
-    r"""Simulate many bracket motions of ``system`` and of its nilpotent approximation at $p$.
+    r"""Simulate many bracket motions of ``sys`` and of its nilpotent approximation at $p$.
 
     Parameters
     ----------
-    system:
+    sys:
         The original system (its parameter values are the defaults of ``vary``).
     brackets:
         One pair ``(I, J)`` or a list of pairs (1-based, different fields).
@@ -299,11 +301,27 @@ def sweep(
         (:class:`~nilpotent.errors.MissingExtraError` otherwise).
     progress:
         Called as ``progress(done_pairs, total_pairs)`` after each chunk.
+    dask_connect_timeout, dask_progress_timeout:
+        Seconds to reach a scheduler given by address (default
+        :data:`~nilpotent.simulation.executors.DEFAULT_CONNECT_TIMEOUT`), and
+        without a finished chunk before the sweep stops with a
+        :class:`~nilpotent.errors.DaskError` (default
+        :data:`~nilpotent.simulation.executors.DEFAULT_PROGRESS_TIMEOUT`); Dask only.
 
     Returns
     -------
     SweepResult
         Rows ordered parameter set → bracket → start → amplitude (grid), or as drawn (random).
+
+    Raises
+    ------
+    OptionError
+        If an option is out of its range (amplitudes, samples, radius, design,
+        periods, integration settings, chunk size, the parameters to vary).
+    PointError
+        If the point is not a point of ``sys``.
+    MissingExtraError
+        If ``dask`` is given without the ``dask`` extra installed.
     """
     # --- validate the request --------------------------------------------------------
     if design not in DESIGNS:
@@ -333,33 +351,34 @@ def sweep(
         raise OptionError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
     if not (math.isfinite(bound) and bound > 0):
         raise OptionError(f"bound must be a number > 0, got {bound}")
-    pairs = _check_brackets(system.m, brackets)
-    varied = _parameter_sets(system, vary)
-    check_dask(dask, chunk_size)
+    pairs = _check_brackets(sys.m, brackets)
+    varied = _parameter_sets(sys, vary)
+    check_dask(dask, chunk_size, connect_timeout=dask_connect_timeout,
+               progress_timeout=dask_progress_timeout)
 
     # --- one job per parameter set ---------------------------------------------------
-    from nilpotent.core.approximation import approximate
-    from nilpotent.core.expressions import format_expression
+    from nilpotent.core.coordinates.approximation import approximate
+    from nilpotent.core.model.expressions import format_expression
 
     names = [n for n, _ in varied]
     combos = list(itertools.product(*[vals for _, vals in varied])) if varied else [()]
     jobs: list[CompiledPair] = []
     psets: list[dict[str, str]] = []
     weights: list[tuple[int, ...]] = []
-    base = system.specialized()
+    base = sys.specialized()
     pt = base.point(point) if point is not None else base.origin()
     try:
         p_float = np.array([float(v) for v in pt])
     except TypeError:
         raise PointError(f"the point {pt} is not made of real numbers") from None
     for combo in combos:
-        sys_k = system.with_parameters(dict(zip(names, combo, strict=True))) if combo else system
+        sys_k = sys.with_parameters(dict(zip(names, combo, strict=True))) if combo else sys
         sysp = sys_k.specialized()
         job = CompiledPair.build(sysp, approximate(sysp, pt))
         jobs.append(job)
         psets.append({n: format_expression(v) for n, v in zip(names, combo, strict=True)})
         weights.append(job.weights)
-    n = system.n
+    n = sys.n
     all_groups = tuple(sorted({wk for w in weights for wk in w}))
 
     # --- the rows --------------------------------------------------------------------
@@ -399,7 +418,8 @@ def sweep(
                 time_samples=int(time_samples), settings=settings,
             ))
     done = execute(_run_chunk, chunks, [c.rows.size for c in chunks], dask=dask,
-                   progress=progress)
+                   progress=progress, connect_timeout=dask_connect_timeout,
+                   progress_timeout=dask_progress_timeout)
     outputs, backend, scheduler, wall = (done.outputs, done.backend, done.scheduler,
                                          done.wall_time)
 
@@ -430,7 +450,7 @@ def sweep(
             tolerance = max(tolerance, out["tolerance"])
         scale = max(scale, out["scale"])
     params = SweepParameters(
-        model=system.name,
+        model=sys.name,
         point=tuple(format_expression(v) for v in pt),
         brackets=pairs,
         amplitudes=tuple(float(a) for a in amps),
@@ -452,7 +472,7 @@ def sweep(
     )
     return SweepResult(
         parameters=params,
-        coordinates=system.coordinate_names,
+        coordinates=sys.coordinate_names,
         parameter_sets=tuple(psets),
         weights=tuple(weights),
         groups=all_groups,

@@ -19,6 +19,7 @@ import numpy as np
 
 from nilpotent.numeric.fits import loglog_slope
 from nilpotent.numeric.integrate import Status
+from nilpotent.strict_json import json_object
 
 __all__ = ["SweepParameters", "SweepResult", "json_float", "read_only"]
 
@@ -86,7 +87,7 @@ class SweepParameters:
     dask: str | None
 
     def to_json(self) -> dict[str, Any]:
-        return {
+        return json_object({
             "model": self.model,
             "point": list(self.point),
             "brackets": [list(b) for b in self.brackets],
@@ -107,7 +108,7 @@ class SweepParameters:
             "engine": self.engine,
             "chunk_size": self.chunk_size,
             "dask": self.dask,
-        }
+        })
 
 
 # --- the result -----------------------------------------------------------------------
@@ -377,4 +378,4 @@ class SweepResult:
                     for row in self.rows()
                 ],
             }
-        return out
+        return json_object(out)

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.compile import CompiledSystem, compile_system
 from nilpotent.numeric.integrate import Status, integrate

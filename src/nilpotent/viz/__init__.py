@@ -13,7 +13,9 @@
 * :mod:`~nilpotent.viz.export` — saving a figure as PNG + SVG (or PDF).
 
 Figures are built with :class:`matplotlib.figure.Figure` directly (no pyplot
-state, no GUI backend), so the same code runs headless, in notebooks and in the CLI.
+state, no GUI backend), so the same code runs headless, in notebooks and in the CLI;
+in Jupyter they display as PNG without ``%matplotlib inline``
+(:mod:`~nilpotent.viz.notebook`, registered when this package is imported).
 """
 
 from nilpotent.viz.animation import AnimationFiles as AnimationFiles
@@ -24,6 +26,7 @@ from nilpotent.viz.animation import save_animation as save_animation
 from nilpotent.viz.export import save_figure as save_figure
 from nilpotent.viz.motion import plot_bracket_motion as plot_bracket_motion
 from nilpotent.viz.motion import plot_motion_comparison as plot_motion_comparison
+from nilpotent.viz.notebook import enable_figure_display as enable_figure_display
 from nilpotent.viz.report_figures import plot_amplitude_panels as plot_amplitude_panels
 from nilpotent.viz.robot import TridentArtists as TridentArtists
 from nilpotent.viz.robot import draw_trident as draw_trident
@@ -38,6 +41,7 @@ __all__ = [
     "TridentArtists",
     "animate_motion_comparison",
     "draw_trident",
+    "enable_figure_display",
     "fit_slope",
     "html_player",
     "plot_amplitude_panels",
@@ -49,3 +53,5 @@ __all__ = [
     "save_figure",
     "update_trident",
 ]
+
+enable_figure_display()  # Jupyter shows the figures (nothing outside IPython)

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from nilpotent.simulate import ScalingStudy
+    from nilpotent.simulation import ScalingStudy
 
 __all__ = ["plot_amplitude_panels"]
 
@@ -35,7 +35,7 @@ def plot_amplitude_panels(
     ----------
     studies : sequence of ((i, j), ScalingStudy)
         The bracket ``[X_i, X_j]`` of each panel (1-based input indices) and
-        its amplitude study (``nilpotent.simulate.scaling_study``).  Weight
+        its amplitude study (``nilpotent.scaling``).  Weight
         groups whose slope is ``None`` (errors below the round-off floor: the
         approximation is exact there) are not drawn; a note in the panel names
         them.

@@ -3,8 +3,10 @@
 ``MATH.md`` §6: for a periodic input of amplitude ``A`` the error of the
 approximation in the privileged coordinates of weight ``w`` is ``O(A^{w+1})``.
 :func:`fit_slope` measures the exponent as the least-squares slope of
-``log(error)`` against ``log(A)``; :func:`plot_error_scaling` draws the errors
-with their fitted lines and slopes in the legend.
+``log(error)`` against ``log(A)`` (the one fitter,
+:func:`nilpotent.numeric.fits.loglog_line`, which the scaling studies use too);
+:func:`plot_error_scaling` draws the errors with their fitted lines and slopes
+in the legend.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure, SubFigure
 
 from nilpotent.errors import OptionError
+from nilpotent.numeric.fits import loglog_line
 
 __all__ = ["fit_slope", "plot_error_scaling"]
 
@@ -23,7 +26,22 @@ __all__ = ["fit_slope", "plot_error_scaling"]
 def fit_slope(amplitudes: np.ndarray, errors: np.ndarray) -> tuple[float, float]:
     """Least-squares fit ``log10(error) = slope · log10(A) + intercept``.
 
-    Only finite positive errors enter; returns ``(slope, intercept)``.
+    Only finite positive errors enter; returns ``(slope, intercept)``.  The fit
+    is :func:`nilpotent.numeric.fits.loglog_line` (natural logs; the intercept is
+    converted to base 10), the one fitter of the scaling studies and sweeps.
+
+    Parameters
+    ----------
+    amplitudes : (k,) array_like
+        The amplitudes ``A`` (positive).
+    errors : (k,) array_like
+        The errors at those amplitudes.
+
+    Raises
+    ------
+    OptionError
+        If the arrays differ in shape or are not 1-d, or fewer than two finite
+        positive errors remain.
 
     Examples
     --------
@@ -40,8 +58,8 @@ def fit_slope(amplitudes: np.ndarray, errors: np.ndarray) -> tuple[float, float]
     keep = np.isfinite(e) & (e > 0) & (a > 0)
     if keep.sum() < 2:
         raise OptionError("need at least two positive finite errors to fit a slope")
-    slope, intercept = np.polyfit(np.log10(a[keep]), np.log10(e[keep]), 1)
-    return float(slope), float(intercept)
+    slope, intercept = loglog_line(a[keep], e[keep])
+    return float(slope), float(intercept / np.log(10.0))
 
 
 def plot_error_scaling(

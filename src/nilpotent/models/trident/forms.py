@@ -68,7 +68,7 @@ from collections.abc import Sequence
 
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError
 
 __all__ = [

@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 import sympy as sp
 
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError, OptionError
 from nilpotent.models.trident.forms import BODY_LEG_ANGLES, FORMS, PAPER_LEG_ANGLES, form_of
 

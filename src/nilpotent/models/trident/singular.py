@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
-from nilpotent.core.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr
 from nilpotent.errors import OptionError
 from nilpotent.models.trident.forms import PAPER_LEG_ANGLES, form_symbols, joint_parts
 from nilpotent.models.trident.geometry import (

@@ -60,11 +60,24 @@ propagates, and the Python work per batch is a handful of array copies
 (:func:`run_heyoka`).  Results do not depend on the thread count.
 
 Compilation (~0.4 s for the trident snake) happens on the first use of a
-system, ``K``, tolerance and set of parameters in use; heyoka keeps the
-compiled code in its own on-disk cache (``$XDG_CACHE_HOME/heyoka``, default
-``~/.cache/heyoka``), from which a new process loads it in ~0.02 s.
-Integrators are kept per system (in the system's memo) for the rest of the
-process.
+system, ``K``, tolerance and set of parameters in use.  heyoka keeps compiled
+object code in an on-disk cache (an SQLite file) from which a new process loads
+it in ~0.02 s, and runs what it finds there: so its cache is never heyoka's
+default folder (``~/.cache/heyoka``, which another user may have prepared) but
+``<code cache>/heyoka`` under the policy of
+:func:`nilpotent.numeric.cache.library_cache` (0700, the user's own, every
+entry the user's own and not writable by others), checked before every
+compilation; when that folder is not safe heyoka's disk cache is switched off
+(a warning says why) and integrators are compiled in every process.
+Integrators are kept per system key (the fields, not the name: a renamed model
+shares them) for the rest of the process; :data:`COMPILATIONS` counts the
+integrators built.
+
+heyoka logs through spdlog on stdout: its level is set to ``critical`` and the
+construction of an integrator (where its cache is read and written) runs with
+file descriptor 1 pointed at stderr, so nothing of heyoka's reaches stdout (one
+JSON object under ``--json``).  Both, and the disk-cache policy, live in
+:mod:`nilpotent.numeric.engines.heyoka_setup`.
 """
 
 from __future__ import annotations
@@ -73,6 +86,7 @@ import copy
 import importlib.util
 import itertools
 import os
+from collections import Counter
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -82,10 +96,15 @@ from typing import Any, ClassVar
 import numpy as np
 import sympy as sp
 
-from nilpotent.errors import MissingExtraError
+from nilpotent.errors import MissingExtraError, OptionError
 from nilpotent.numeric.compile import CompiledSystem
-from nilpotent.numeric.engines import Engine, EngineOutput
+from nilpotent.numeric.engines.base import Engine, EngineOutput
 from nilpotent.numeric.engines.heyoka_events import run_chunk
+from nilpotent.numeric.engines.heyoka_setup import (
+    quiet_logger,
+    stdout_to_stderr,
+    use_safe_disk_cache,
+)
 from nilpotent.numeric.signals import Signal
 
 #: How to install the optional dependency.
@@ -102,6 +121,10 @@ class HeyokaEngine(Engine):
 
     def available(self) -> bool:
         return heyoka_available()
+
+    def handles(self, system: Any) -> bool:
+        """Whether heyoka can express every field of ``system`` (:func:`heyoka_handles`)."""
+        return heyoka_handles(system)
 
     def solve(
         self,
@@ -129,12 +152,50 @@ def heyoka_available() -> bool:
     return importlib.util.find_spec("heyoka") is not None
 
 
+#: Integrators built (compiled or loaded from heyoka's disk cache) in this process.
+COMPILATIONS: Counter[str] = Counter()
+
+
 def _heyoka() -> ModuleType:
     if not heyoka_available():
         raise MissingExtraError(f"the heyoka engine needs heyoka: {INSTALL_HINT}")
     import heyoka
 
+    quiet_logger(heyoka)
     return heyoka
+
+def _convert(hy: ModuleType, system: CompiledSystem, f: sp.Expr, smap: dict) -> Any:
+    """``f`` as a heyoka expression; :class:`OptionError` for what heyoka cannot express."""
+    try:
+        return hy.from_sympy(f, smap)
+    except (TypeError, ValueError) as exc:
+        raise OptionError(
+            f"the heyoka engine cannot integrate {system.name}: {exc} (use engine "
+            "'scipy' or 'numba')"
+        ) from None
+
+
+def heyoka_handles(system: CompiledSystem) -> bool:
+    """Whether heyoka can express every field of ``system`` (``from_sympy``: not ``Abs``).
+
+    Kept in the system's memo.
+    """
+    memo = system._memo
+    if "heyoka-handles" not in memo:
+        hy = _heyoka()
+        names = [f"q{k}" for k in range(system.n)]
+        hv = hy.make_vars(*names)
+        hv = list(hv) if system.n > 1 else [hv]
+        smap = dict(zip(sp.symbols(f"q0:{system.n}", real=True), hv, strict=True))
+        try:
+            for row in system.fields:
+                for f in row:
+                    if f not in (0, 1):
+                        _convert(hy, system, f, smap)
+            memo["heyoka-handles"] = True
+        except OptionError:
+            memo["heyoka-handles"] = False
+    return bool(memo["heyoka-handles"])
 
 
 def heyoka_tolerance(rtol: float, atol: float) -> float:
@@ -255,7 +316,7 @@ def _rhs(
             f = system.fields[i][j]
             if f == 0 or inputs[i] is None:
                 continue
-            terms.append(inputs[i] if f == 1 else inputs[i] * hy.from_sympy(f, smap))
+            terms.append(inputs[i] if f == 1 else inputs[i] * _convert(hy, system, f, smap))
         rhs.append(hy.sum(terms) if terms else hy.expression(0.0))
     return list(zip(hv, rhs, strict=True)), len(slots) + len(frozen)
 
@@ -279,8 +340,11 @@ def taylor_integrator(
 
     ``used``: which runtime parameters may be nonzero (:func:`_rhs`; ``None``:
     all); ``frozen``: coordinates held constant (read as parameters).
-    Compiled on the first call (LLVM, in memory; heyoka's on-disk cache
-    across processes), then kept in the system's memo.
+    Compiled on the first call (LLVM, in memory; heyoka's on-disk cache in the
+    checked folder of
+    :func:`~nilpotent.numeric.engines.heyoka_setup.use_safe_disk_cache` across
+    processes), then kept
+    in the system's memo (shared by every system with the same key).
     """
     key = ("heyoka", int(harmonics), float(tol), used, tuple(frozen))
     memo = system._memo  # the CompiledSystem's per-process cache
@@ -288,8 +352,11 @@ def taylor_integrator(
         hy = _heyoka()
         sysd, _ = _rhs(system, int(harmonics), used, tuple(frozen))
         bs = int(hy.recommended_simd_size())
-        # heyoka sizes the parameters by the largest index the expressions use
-        ta = hy.taylor_adaptive_batch(sysd, np.zeros((len(sysd), bs)), tol=float(tol))
+        with stdout_to_stderr():
+            use_safe_disk_cache(hy)
+            # heyoka sizes the parameters by the largest index the expressions use
+            ta = hy.taylor_adaptive_batch(sysd, np.zeros((len(sysd), bs)), tol=float(tol))
+        COMPILATIONS[system.key] += 1
         slots = _slots((True,) * _signal_parameters(system.m, int(harmonics))
                        if used is None else used)
         memo[key] = TaylorIntegrator(ta, int(harmonics), float(tol), bs, int(ta.order),

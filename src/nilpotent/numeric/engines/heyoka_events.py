@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from nilpotent.numeric.engines import Status
+from nilpotent.numeric.engines.base import Status
 
 _BLOW_UP, _MAX_STEPS, _NON_FINITE = int(Status.BLOW_UP), int(Status.MAX_STEPS), int(
     Status.NON_FINITE)

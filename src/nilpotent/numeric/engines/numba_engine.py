@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from nilpotent.numeric.compile import CompiledSystem, numba_available
-from nilpotent.numeric.engines import Engine, EngineOutput
+from nilpotent.numeric.engines.base import Engine, EngineOutput
 
 __all__ = ["NumbaEngine", "kernels_cached"]
 

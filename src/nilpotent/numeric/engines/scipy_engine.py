@@ -15,7 +15,7 @@ import numpy as np
 
 from nilpotent.errors import OptionError
 from nilpotent.numeric.compile import CompiledSystem
-from nilpotent.numeric.engines import Engine, EngineOutput, Status, check_times, state_status
+from nilpotent.numeric.engines.base import Engine, EngineOutput, Status, check_times, state_status
 from nilpotent.numeric.signals import Signal
 from nilpotent.numeric.tableaux import DOP853
 

@@ -4,10 +4,10 @@ r"""The audit of the paper: every checkable printed statement against a computat
 (:func:`nilpotent.report.paper.read_paper`), computes the same objects with the
 library — the built-in models ``trident-snake`` (body-velocity inputs, the
 paper's Section 4, ``r = l = 1``) and ``trident-snake-paper`` (its eq. ``vf``),
-:func:`~nilpotent.core.filtration.analyze`,
-:func:`~nilpotent.core.approximation.approximate`, brackets with
-:func:`~nilpotent.core.brackets.bracket`, and one-period simulations of the
-periodic inputs (:mod:`nilpotent.simulate`) — and compares them **when it
+:func:`~nilpotent.core.analysis.filtration.analyze`,
+:func:`~nilpotent.core.coordinates.approximation.approximate`, brackets with
+:func:`~nilpotent.core.lie.brackets.bracket`, and one-period simulations of the
+periodic inputs (:mod:`nilpotent.simulation`) — and compares them **when it
 runs**.  Nothing in this module states a verdict in advance.
 
 Comparisons are exact where the objects are exact: two expressions are equal

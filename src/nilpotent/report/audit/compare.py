@@ -16,7 +16,7 @@ from collections.abc import Sequence
 
 import sympy as sp
 
-from nilpotent.core.expressions import as_expr, format_expression
+from nilpotent.core.model.expressions import as_expr, format_expression
 from nilpotent.report.latexmath import strip_layout
 from nilpotent.report.paper import PrintedField
 
@@ -166,9 +166,9 @@ def push_forward(
 def numeric_rank(vectors: Sequence[Sequence[sp.Expr]]) -> int:
     """Rank of exact vectors (the span of brackets at the origin) by the one rank engine.
 
-    :func:`nilpotent.core.spans.rank` (certified; a random point for symbolic entries).
+    :func:`nilpotent.core.decide.spans.rank` (certified; a random point for symbolic entries).
     """
-    from nilpotent.core.spans import rank  # the one rank engine
+    from nilpotent.core.decide.spans import rank  # the one rank engine
 
     return rank(vectors, probabilistic=True)[0]
 

@@ -11,9 +11,9 @@ from functools import cached_property
 
 import sympy as sp
 
-from nilpotent.core.brackets import bracket
-from nilpotent.core.expressions import as_expr
-from nilpotent.core.system import ControlSystem
+from nilpotent.core.lie.brackets import bracket
+from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.system import ControlSystem
 from nilpotent.report.audit.compare import at_origin, push_forward, weighted_part
 from nilpotent.report.paper import PaperContent, X, Y
 
@@ -52,19 +52,19 @@ class Computed:
 
     @cached_property
     def body_filtration(self):
-        from nilpotent.core.filtration import analyze
+        from nilpotent.core.analysis.filtration import analyze
 
         return analyze(self.body)
 
     @cached_property
     def vf_filtration(self):
-        from nilpotent.core.filtration import analyze
+        from nilpotent.core.analysis.filtration import analyze
 
         return analyze(self.vf)
 
     @cached_property
     def approximation(self):
-        from nilpotent.core.approximation import approximate
+        from nilpotent.core.coordinates.approximation import approximate
 
         return approximate(self.vf)
 
@@ -105,13 +105,14 @@ class Computed:
     def displacement_rate(self, sys: ControlSystem, i: int, j: int) -> tuple[float, ...]:
         """``Δx / (πA²)`` over one period of the ``(i, j)`` periodic input, extrapolated to A → 0.
 
-        One-period simulations (:func:`nilpotent.simulate.simulate`) at
+        One-period simulations (:func:`nilpotent.simulation.simulate`) at
         ``A = 0.02`` and ``0.01`` from the origin (adaptive DOP853, rtol 1e-12);
         since ``Δx/(πA²) = [X_i,X_j](0) + c A + O(A²)``, the Richardson
         combination ``2 r(A/2) − r(A)`` removes the ``O(A)`` term.
         """
         from nilpotent.numeric import compile_system
-        from nilpotent.simulate import bracket_signal, simulate
+        from nilpotent.numeric.signals import bracket_signal
+        from nilpotent.simulation import simulate
 
         key = (sys.name, i, j)
         cache = self.__dict__.setdefault("_rates", {})
@@ -129,7 +130,7 @@ class Computed:
 
     def linear_order(self, row: sp.Matrix) -> float:
         """Non-holonomic order at 0 of the linear function ``row · x`` for eq. vf."""
-        from nilpotent.core.orders import function_order
+        from nilpotent.core.coordinates.orders import function_order
 
         return function_order(self.vf, as_expr(sum(row[j] * X[j] for j in range(6))), None, 4)
 
@@ -138,7 +139,7 @@ class Computed:
 
         In privileged coordinates ``z`` (approximate()'s), ``ord(Z) = min_j ord(Z z_j) − w_j``.
         """
-        from nilpotent.core.orders import function_order
+        from nilpotent.core.coordinates.orders import function_order
 
         z = self.approximation.coordinates.forward
         weights = self.vf_filtration.weights

@@ -9,6 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from nilpotent.strict_json import json_object
+
 __all__ = ["AGREES", "AUDIT_SCHEMA", "DIFFERS", "Audit", "AuditEntry", "make_entry"]
 
 
@@ -78,7 +80,7 @@ class Audit:
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/audit@1`` object of ``INTERFACE.md`` (plus a summary)."""
-        return {
+        return json_object({
             "schema": AUDIT_SCHEMA,
             "paper_sha256": self.paper_sha256,
             "summary": {
@@ -87,7 +89,7 @@ class Audit:
                 "differs": len(self.differing),
             },
             "entries": [e.as_dict() for e in self.entries],
-        }
+        })
 
 
 def make_entry(

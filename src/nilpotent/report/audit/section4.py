@@ -7,8 +7,8 @@ from collections.abc import Iterable, Sequence
 
 import sympy as sp
 
-from nilpotent.core.brackets import bracket
-from nilpotent.core.expressions import as_expr
+from nilpotent.core.lie.brackets import bracket
+from nilpotent.core.model.expressions import as_expr
 from nilpotent.report.audit.compare import (
     fmt,
     fmt_rate,

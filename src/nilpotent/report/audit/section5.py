@@ -6,7 +6,7 @@ from collections.abc import Iterable
 
 import sympy as sp
 
-from nilpotent.core.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr
 from nilpotent.report.audit.compare import (
     at_origin,
     fmt,
