@@ -21,8 +21,8 @@ import sympy as sp
 
 from nilpotent.core.coordinates import exponential_map
 from nilpotent.core.coordinates.approximation import approximate, certify
-from nilpotent.core.decide.evaluation import double_inverse
 from nilpotent.core.coordinates.orders import function_order
+from nilpotent.core.decide.evaluation import double_inverse
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError
 from nilpotent.models import load_system

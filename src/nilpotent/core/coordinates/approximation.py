@@ -32,18 +32,12 @@ import symengine as se
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.coordinates.exponential_map import check_budget, exponential_grading, series_budget
 from nilpotent.core.analysis.filtration import Filtration
-from nilpotent.core.coordinates.privileged import (
-    PrivilegedCoordinates,
-    FrameContext,
-    coordinate_orders,
-    privileged_coordinates,
+from nilpotent.core.coordinates.exponential_map import (
+    check_budget,
+    exponential_grading,
+    series_budget,
 )
-from nilpotent.core.coordinates.pullback import pushforward_ok as _pushforward_ok
-from nilpotent.core.coordinates.pullback import read_poly as _read
-from nilpotent.core.decide.spans import Decision, ExprVector, MeasuredSpan, Span
-from nilpotent.core.model.system import ControlSystem
 from nilpotent.core.coordinates.jets import (
     Poly,
     ZeroTest,
@@ -56,6 +50,8 @@ from nilpotent.core.coordinates.privileged import (
     coordinate_orders,
     privileged_coordinates,
 )
+from nilpotent.core.coordinates.pullback import pushforward_ok as _pushforward_ok
+from nilpotent.core.coordinates.pullback import read_poly as _read
 from nilpotent.core.decide.spans import Decision, ExprVector, MeasuredSpan, Span
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError

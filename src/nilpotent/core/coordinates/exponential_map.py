@@ -76,8 +76,8 @@ def check_budget(ctx: FrameContext) -> None:
         raise ComputationLimitError(
             f"exponential coordinates of {ctx.sys.name!r} in exact arithmetic at the point "
             f"exceed the time budget of {deadline[1]:g} s (SERIES_TIME_BUDGET in "
-            "nilpotent.core.coordinates.exponential_map): their series inverse swells with the exact "
-            "irrational values there; use method 'algebraic' (the default), or give the "
+            "nilpotent.core.coordinates.exponential_map): their series inverse swells with "
+            "the exact irrational values there; use method 'algebraic' (the default), or give the "
             "point as decimals (floating-point coefficients, seconds)"
         )
 

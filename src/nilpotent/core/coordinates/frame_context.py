@@ -17,10 +17,10 @@ from collections.abc import Sequence
 import symengine as se
 import sympy as sp
 
-from nilpotent.core.decide.evaluation import double_inverse, exact_value
 from nilpotent.core.analysis.filtration import Filtration
-from nilpotent.core.decide.spans import to_double
 from nilpotent.core.coordinates.jets import Poly, ZeroTest, to_symengine
+from nilpotent.core.decide.evaluation import double_inverse, exact_value
+from nilpotent.core.decide.spans import to_double
 from nilpotent.errors import ComputationLimitError
 
 __all__ = ["EXACT_TRIAL_BUDGET", "needs_floats"]

@@ -18,6 +18,7 @@ import symengine as se
 import sympy as sp
 
 from nilpotent.core.coordinates.jets import Poly, ZeroTest, lie_derivative, weighted_degree
+from nilpotent.core.decide.spans import NotEvaluable, is_zero
 from nilpotent.core.lie.brackets import (
     se_coordinates,
     se_lie_derivative,
@@ -25,9 +26,7 @@ from nilpotent.core.lie.brackets import (
     word_field_symengine,
 )
 from nilpotent.core.model.expressions import as_expr
-from nilpotent.core.decide.spans import NotEvaluable, is_zero
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.core.coordinates.jets import Poly, ZeroTest, lie_derivative, weighted_degree
 from nilpotent.errors import OptionError, PointError
 
 Order = int | float

@@ -66,6 +66,7 @@ from dataclasses import dataclass, field
 import sympy as sp
 
 from nilpotent import typeset
+from nilpotent.core.analysis.filtration import Filtration, analyze
 from nilpotent.core.coordinates.exponential_map import (
     check_budget,
     exponential_map,
@@ -73,17 +74,13 @@ from nilpotent.core.coordinates.exponential_map import (
     from_exponential_map,
     series_budget,
 )
-from nilpotent.core.model.expressions import as_expr
-from nilpotent.core.analysis.filtration import Filtration, analyze
 from nilpotent.core.coordinates.frame_context import (
-    SERIES_METHODS,
     EXACT_TRIAL_BUDGET,
+    SERIES_METHODS,
     FrameContext,
-    rational_values,
     needs_floats,
+    rational_values,
 )
-from nilpotent.core.coordinates.orders import chain_order_homogeneous, low_order_terms
-from nilpotent.core.model.system import ControlSystem
 from nilpotent.core.coordinates.jets import (
     Poly,
     lie_derivative,
@@ -92,7 +89,6 @@ from nilpotent.core.coordinates.jets import (
     weighted_jets,
 )
 from nilpotent.core.coordinates.orders import chain_order_homogeneous, low_order_terms
-from nilpotent.core.decide.spans import to_double
 from nilpotent.core.model.expressions import as_expr
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import (
