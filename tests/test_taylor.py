@@ -76,7 +76,11 @@ def test_zero_test():
     assert z(se.S(0)) and not z(se.S(1))
     assert z(se.cos(se.Rational(1, 5)) ** 2 + se.sin(se.Rational(1, 5)) ** 2 - 1)
     assert z.numeric_decisions == 1
-    assert z(se.RealDouble(1e-17)) and not z(se.RealDouble(1e-3))
+    # floats: relative to the scale they were computed at, never to an absolute unit
+    assert z(se.RealDouble(1e-17), 1.0) and not z(se.RealDouble(1e-3), 1.0)
+    assert not z(se.RealDouble(1e-17))  # no scale: only an exact 0 is 0
+    assert not z(se.RealDouble(1e-60), 1e-55) and z(se.RealDouble(1e-70), 1e-55)
+    assert not z(se.RealDouble(1e280), 1e285) and z(se.RealDouble(1e270), 1e285)
 
 
 def test_not_smooth():

@@ -11,10 +11,12 @@ expansion.
 $\hat X_i$ is pushed forward to the model coordinates with the Jacobian,
 $[\hat X_i]_x(x) = (\partial x/\partial y)(y(x))\,[\hat X_i]_y(y(x))$; for the
 ``linear`` and ``algebraic`` coordinates both maps are polynomial and exact,
-so ``fields_x`` is exact (polynomials in $x - p$).  For ``exponential``
-coordinates the forward map is a truncated series and so is ``fields_x``
-(terms of degree $> r$ in $z = A(x - p)$ dropped, $z_k$ counting its
-order: the dropped part is a vector field of order $\ge 1$).
+so ``fields_x`` is exact (polynomials in $x - p$).  For ``exponential`` and
+``exponential-1`` coordinates the forward map is a truncated series and so is
+``fields_x`` (terms of degree $> r$ in $z = A(x - p)$ dropped, $z_k$ counting
+its order: the dropped part is a vector field of order $\ge 1$): it differs
+from the formula above from degree 3 in $x - p$, and its pull-back to $y$
+still equals $\hat X$ up to the degrees checked by ``pushforward_ok``.
 
 The :class:`Certificate` is computed, never assumed (see :func:`certify`).
 Bracket convention $[X,Y] = DY\cdot X - DX\cdot Y$.
@@ -23,6 +25,7 @@ Bracket convention $[X,Y] = DY\cdot X - DX\cdot Y$.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass, replace
 
 import symengine as se
@@ -30,7 +33,11 @@ import sympy as sp
 
 from nilpotent import typeset
 from nilpotent.core.analysis.filtration import Filtration
-from nilpotent.core.coordinates.exponential_map import exponential_grading
+from nilpotent.core.coordinates.exponential_map import (
+    check_budget,
+    exponential_grading,
+    series_budget,
+)
 from nilpotent.core.coordinates.jets import (
     Poly,
     ZeroTest,
@@ -43,6 +50,8 @@ from nilpotent.core.coordinates.privileged import (
     coordinate_orders,
     privileged_coordinates,
 )
+from nilpotent.core.coordinates.pullback import pushforward_ok as _pushforward_ok
+from nilpotent.core.coordinates.pullback import read_poly as _read
 from nilpotent.core.decide.spans import Decision, ExprVector, MeasuredSpan, Span
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
@@ -338,9 +347,11 @@ def _se_symbols(names: Sequence[sp.Symbol]) -> list[se.Symbol]:
     return [to_symengine(s) for s in names]
 
 
-def _polys(fields: Sequence[Sequence[sp.Expr]], names: Sequence[sp.Symbol]) -> list[list[Poly]]:
+def _polys(
+    fields: Sequence[Sequence[sp.Expr]], names: Sequence[sp.Symbol], numeric: bool = False
+) -> list[list[Poly]]:
     ys = _se_symbols(names)
-    return [[Poly.from_expr(to_symengine(c), ys) for c in f] for f in fields]
+    return [[_read(to_symengine(c), ys, numeric) for c in f] for f in fields]
 
 
 def _homogeneous(
@@ -421,6 +432,8 @@ def _bracket_levels(
         for X in hat:
             for b in current:
                 br = bracket(X, b)
+                if any(c.mags is not None for c in br):  # floats: drop what cancelled
+                    br = tuple(c.drop_zeros(zero) for c in br)
                 if ech.add(_field_vector(br)):
                     nxt.append(br)
         levels.append(nxt)
@@ -435,7 +448,10 @@ def _growth_at_zero(
     growth = []
     for level in levels:
         for f in level:
-            ech.add({j: c.value_at_zero() for j, c in enumerate(f) if c.value_at_zero() != 0})
+            origin = (0,) * n
+            ech.add(
+                {j: c.value_at_zero() for j, c in enumerate(f) if not c.is_zero_at(origin, zero)}
+            )
         growth.append(ech.rank)
     while len(growth) > 1 and growth[-1] == growth[-2]:
         growth.pop()
@@ -460,59 +476,6 @@ def _remainder_orders(
     return tuple(out)
 
 
-def _pushforward_ok(
-    approx: NilpotentApproximation, hat: Sequence[Sequence[Poly]], zero: ZeroTest
-) -> bool:
-    r"""Pull ``fields_x`` back: $(\partial y/\partial x)(x(y))\,[\hat X]_x(x(y))$ equals $\hat X$.
-
-    All in truncated polynomial arithmetic in $y$: ``fields_x`` is read as a
-    polynomial in $d = x - p$, composed with $d(y) = B\chi(y)$; the Jacobian is
-    $(\partial y/\partial z)(\chi(y))\,A$ from the forward map $y(z)$.  Component
-    $j$ is compared up to weighted degree $w_j$ (exact coordinates) or $w_j - 1$.
-    """
-    coords = approx.coordinates
-    ctx = FrameContext.of(approx.filtration, approx.coordinates.numeric)
-    w = coords.weights
-    n = coords.n
-    exact = coords.inverse_exact and coords.forward_exact and approx.fields_x_exact
-    degrees = [wj if exact else wj - 1 for wj in w]
-    top = max(degrees)
-    ds = [se.Symbol(f"_nilpotent_d{k}") for k in range(n)]
-    shift = {x: d + to_symengine(p) for x, d, p in zip(ctx.xsyms, ds, ctx.p, strict=True)}
-    chi = list(coords.inverse_poly)
-    d_of_y = [
-        x - Poly.constant(n, to_symengine(p)) for x, p in zip(ctx.x_of(chi), ctx.p, strict=True)
-    ]
-    jac_z = [
-        [coords.forward_poly[j].diff(l).compose(chi, w, top) for l in range(n)] for j in range(n)
-    ]
-    jac = []
-    for j in range(n):
-        row = []
-        for k in range(n):
-            acc = Poly(n)
-            for l in range(n):
-                a = ctx.Ase[l][k]
-                if a != 0 and jac_z[j][l].terms:
-                    acc = acc + jac_z[j][l].scale(a)
-            row.append(acc)
-        jac.append(row)
-    for fx, h in zip(approx.fields_x, hat, strict=True):
-        comps = [
-            Poly.from_expr(to_symengine(c).xreplace(shift), ds).compose(d_of_y, w, top)
-            for c in fx
-        ]
-        for j in range(n):
-            acc = Poly(n)
-            for k in range(n):
-                if jac[j][k].terms and comps[k].terms:
-                    acc = acc + jac[j][k].mul(comps[k], w, degrees[j])
-            diff = (acc - h[j]).truncate(w, degrees[j])
-            if diff.drop_zeros(zero).terms:
-                return False
-    return True
-
-
 def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -> Certificate:
     """Recompute every check of ``approx`` from its system, coordinates and fields.
 
@@ -525,8 +488,8 @@ def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -
     coords = approx.coordinates
     w = coords.weights
     r = approx.filtration.step
-    zero = ZeroTest()
-    hat = _polys(approx.fields, coords.names)
+    zero = ZeroTest(unit=1.0)  # the fields in y: frame units (taylor.ZeroTest)
+    hat = _polys(approx.fields, coords.names, coords.numeric)
     homogeneous = _homogeneous(approx.fields, coords.names, w)
     levels = _bracket_levels(hat, 2 * r + 2, zero)
     nonzero = [k for k, lev in enumerate(levels, start=1) if lev]
@@ -536,7 +499,8 @@ def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -
     jets = coords.field_jets(extra=1)
     rem = _remainder_orders(jets, hat, w, zero)
     push = _pushforward_ok(approx, hat, zero)
-    ctx_zero = FrameContext.of(approx.filtration, approx.coordinates.numeric).zero
+    ctx = FrameContext.of(approx.filtration, approx.coordinates.numeric)
+    ctx_decisions = ctx.zero.numeric_decisions + ctx.zero_x.numeric_decisions
     orders = coordinate_orders(coords) if recompute_orders else coords.orders
     return Certificate(
         orders=tuple(orders),
@@ -551,7 +515,7 @@ def certify(approx: NilpotentApproximation, *, recompute_orders: bool = False) -
         pushforward_ok=push,
         exact=approx.filtration.exact
         and zero.numeric_decisions == 0
-        and ctx_zero.numeric_decisions == 0,
+        and ctx_decisions == 0,
     )
 
 
@@ -579,6 +543,7 @@ def _pushforward(
     ]
     out = []
     for h in hat:
+        check_budget(ctx)
         hz = [c.compose(fwd, omega, top) for c in h]
         vz = []
         for k in range(n):
@@ -595,7 +560,7 @@ def _pushforward(
                 if b != 0 and vz[l].terms:
                     acc = acc + vz[l].scale(b)
             vx.append(
-                acc.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts, keep_factors=ctx.numeric)
+                acc.compose(lin).drop_zeros(ctx.zero_x).to_sympy(shifts, keep_factors=ctx.numeric)
             )
         out.append(tuple(vx))
     return tuple(out), exact
@@ -659,9 +624,12 @@ def approximate(
             sys, point, method, numeric=numeric, max_length=max_length
         )
         bar.update(1, "approximation")
-        result = _approximation(sys, coords)
-        bar.update(2, "certificate")
-        cert = certify(result)
+        series = coords.method in ("exponential", "exponential-1") and not coords.numeric
+        ctx = FrameContext.of(coords.filtration, coords.numeric)
+        with series_budget(ctx) if series else nullcontext():
+            result = _approximation(sys, coords)
+            bar.update(2, "certificate")
+            cert = certify(result)
         bar.update(3)
     return replace(result, certificate=cert)
 

@@ -16,7 +16,9 @@ system, the point, the filtration, the weights and the linear adapted map ``A``)
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import time
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 import symengine as se
@@ -28,7 +30,56 @@ from nilpotent.errors import ComputationLimitError
 if TYPE_CHECKING:
     from nilpotent.core.coordinates.privileged import Built, FrameContext
 
-__all__ = ["exponential_grading", "exponential_map", "first_kind_map", "from_exponential_map"]
+__all__ = [
+    "SERIES_TIME_BUDGET",
+    "check_budget",
+    "exponential_grading",
+    "exponential_map",
+    "first_kind_map",
+    "from_exponential_map",
+    "series_budget",
+]
+
+SERIES_TIME_BUDGET = 60.0
+"""CPU seconds the exponential methods may spend on exact coordinates before they refuse.
+
+CPU time of this process, so that a loaded machine does not trip it.
+The same budget as the analysis (``ANALYSIS_TIME_BUDGET``): at an exact point with
+irrational algebraic values ($\\alpha = \\pi/3$) the series inverse carries
+coefficients in a number field and can run for many minutes; past the budget a
+:class:`~nilpotent.errors.ComputationLimitError` says so and what to do instead.
+"""
+
+
+@contextmanager
+def series_budget(ctx: FrameContext, seconds: float | None = None) -> Iterator[None]:
+    """Run a construction on ``ctx`` under a time budget (default :data:`SERIES_TIME_BUDGET`)."""
+    old = ctx.__dict__.get("deadline")
+    budget = SERIES_TIME_BUDGET if seconds is None else seconds
+    ctx.__dict__["deadline"] = (time.process_time() + budget, budget)
+    try:
+        yield
+    finally:
+        ctx.__dict__["deadline"] = old
+
+
+def check_budget(ctx: FrameContext) -> None:
+    """Raise :class:`~nilpotent.errors.ComputationLimitError` past the budget of ``ctx``.
+
+    Raises
+    ------
+    ComputationLimitError
+        When a :func:`series_budget` is running on ``ctx`` and its time is spent.
+    """
+    deadline = ctx.__dict__.get("deadline")
+    if deadline is not None and time.process_time() > deadline[0]:
+        raise ComputationLimitError(
+            f"exponential coordinates of {ctx.sys.name!r} in exact arithmetic at the point "
+            f"exceed the time budget of {deadline[1]:g} s (SERIES_TIME_BUDGET in "
+            "nilpotent.core.coordinates.exponential_map): their series inverse swells with "
+            "the exact irrational values there; use method 'algebraic' (the default), or give the "
+            "point as decimals (floating-point coefficients, seconds)"
+        )
 
 
 def integrate(poly: Poly, k: int) -> Poly:
@@ -62,6 +113,7 @@ def exponential_map(ctx: FrameContext, degree: int) -> list[Poly]:
         # The error of the k-th iterate has weighted order >= (k + 1) w_l (the integral
         # adds w_l), so ceil((degree + 1) / w_l) - 1 iterations are exact to ``degree``.
         for _ in range(-(-(degree + 1) // wl) - 1):
+            check_budget(ctx)
             vals = frame_jets_along(ctx, l, cur, degree - wl)
             cur = [b + integrate(v, l) for b, v in zip(base, vals, strict=True)]
         E = cur
@@ -178,6 +230,7 @@ def first_kind_map(ctx: FrameContext, degree: int) -> list[Poly]:
     for it in range(1, degree + 1):
         # iterate ``it`` is exact to weighted degree ``it``: jets to ``it - 1`` suffice
         top = min(degree, it)
+        check_budget(ctx)
         jets = [frame_jets_along(ctx, j, cur, top - 1, wt) for j in range(n)]
         new = []
         for k in range(n):
@@ -215,6 +268,7 @@ def from_exponential_map(ctx: FrameContext, E: Sequence[Poly]) -> Built:
     # k + 1 at least (each substitution gains one degree), so it is truncated there.
     for k in range(1, top + 1):
         deg = min(top, k + 1)
+        check_budget(ctx)
         y = [
             (Poly.variable(n, j) - nonlinear[j].compose(y, omega, deg)).truncate(omega, deg)
             for j in range(n)

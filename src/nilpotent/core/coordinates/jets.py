@@ -37,7 +37,7 @@ from typing import cast
 import symengine as se
 import sympy as sp
 
-from nilpotent.core.decide.spans import is_zero, to_double
+from nilpotent.core.decide.spans import is_zero, negligible, to_double
 from nilpotent.errors import PointError
 
 Monomial = tuple[int, ...]
@@ -74,7 +74,7 @@ def _clean(c: se.Basic) -> se.Basic:
 
 
 class ZeroTest:
-    """Decide whether an exact coefficient is zero.
+    r"""Decide whether an exact coefficient is zero.
 
     Structural first (symengine's canonical form after expansion); where that
     leaves a constant that is not a number, :func:`nilpotent.core.decide.spans.is_zero`
@@ -82,21 +82,31 @@ class ZeroTest:
     nonzero); a constant that stays within a ball around 0 at
     :data:`~nilpotent.core.decide.spans.MAX_PRECISION_BITS` bits without an exact proof
     counts as 0 and as a numerical decision.  A float (a value computed in
-    floating point) is zero below :attr:`float_tolerance` in absolute value.
+    floating point) is zero when it is negligible relative to its ``scale``,
+    the size of the terms it was summed from
+    (:func:`nilpotent.core.decide.spans.negligible`, :attr:`Poly.mags`): no absolute
+    threshold, so the decisions do not change when a system is scaled.  A float
+    without a scale is zero only when it is exactly 0.  ``unit`` (default 0) is a
+    least scale, for floats in units where 1 is natural: the adapted coordinates
+    $z$ of :mod:`nilpotent.core.coordinates.privileged`, where the frame is the unit
+    ($Y_k(p) = \partial_{z_k}$) whatever the scale of the system, and where a
+    coefficient computed from values at the rounded point can carry an error
+    its tracked magnitude does not see.
     :attr:`numeric_decisions` counts the coefficients decided zero numerically.
     """
 
-    def __init__(self, digits: int = 50, float_tolerance: float = 1e-9) -> None:
+    def __init__(self, digits: int = 50, unit: float = 0.0) -> None:
         self.digits = digits
-        self.float_tolerance = float_tolerance
+        self.unit = unit
         self.numeric_decisions = 0
 
-    def __call__(self, c: se.Basic) -> bool:
+    def __call__(self, c: se.Basic, scale: float | None = None) -> bool:
         c = _clean(se.S(c))
         if c == 0:
             return True
         if isinstance(c, se.RealDouble | se.ComplexDouble):
-            if abs(complex(c)) < self.float_tolerance:
+            value = abs(complex(c))
+            if negligible(value, max(value if scale is None else scale, self.unit)):
                 self.numeric_decisions += 1
                 return True
             return False
@@ -112,6 +122,14 @@ class ZeroTest:
         return verdict
 
 
+def _size(c: se.Basic) -> float:
+    """$|c|$ as a double (the magnitude of a coefficient nobody tracked)."""
+    try:
+        return abs(complex(c))
+    except (TypeError, RuntimeError):
+        return abs(to_double(c))
+
+
 class Poly:
     r"""A sparse polynomial $\sum_\alpha c_\alpha y^\alpha$ with exact coefficients.
 
@@ -122,9 +140,14 @@ class Poly:
     no truncation).
     """
 
-    __slots__ = ("nvars", "terms")
+    __slots__ = ("mags", "nvars", "terms")
 
-    def __init__(self, nvars: int, terms: Mapping[Monomial, se.Basic] | None = None) -> None:
+    def __init__(
+        self,
+        nvars: int,
+        terms: Mapping[Monomial, se.Basic] | None = None,
+        mags: Mapping[Monomial, float] | None = None,
+    ) -> None:
         self.nvars = nvars
         clean: dict[Monomial, se.Basic] = {}
         if terms:
@@ -133,6 +156,41 @@ class Poly:
                 if c != 0:
                     clean[mono] = c
         self.terms = clean
+        self.mags: dict[Monomial, float] | None = (
+            None if mags is None else {m: mags[m] if m in mags else _size(c)
+                                       for m, c in clean.items()}
+        )
+        """Magnitudes of floating-point coefficients (``None``: not tracked).
+
+        ``mags[m]`` bounds the sizes of the terms whose sum ``terms[m]`` is, as
+        computed: the scale of its rounding error, what the zero test compares it
+        with (:class:`ZeroTest`).  Tracked once :meth:`tracked` starts it (floats
+        from :func:`weighted_jets`, fields read back from floats); every operation
+        with a tracked operand tracks its result (an untracked operand counts
+        $|c|$), and exact computations never pay for it.
+        """
+
+    def tracked(self) -> Poly:
+        """This polynomial with its magnitudes tracked (from $|c|$ where not yet)."""
+        if self.mags is not None:
+            return self
+        return Poly(self.nvars, self.terms, {})
+
+    def magnitude(self, mono: Monomial) -> float | None:
+        """The tracked magnitude of the coefficient of ``mono`` (``None``: not tracked)."""
+        if self.mags is None:
+            return None
+        return self.mags.get(mono, 0.0)
+
+    def _mag(self, mono: Monomial) -> float:
+        if self.mags is not None and mono in self.mags:
+            return self.mags[mono]
+        c = self.terms.get(mono)
+        return 0.0 if c is None else _size(c)
+
+    def _keep(self, terms: Mapping[Monomial, se.Basic]) -> Poly:
+        """A sub-polynomial of this one (its magnitudes kept)."""
+        return Poly(self.nvars, terms, self.mags)
 
     # --- constructors -------------------------------------------------------
     @classmethod
@@ -200,52 +258,70 @@ class Poly:
         """The set of weighted degrees of the terms."""
         return {weighted_degree(m, weights) for m in self.terms}
 
+    def is_zero_at(self, mono: Monomial, zero: ZeroTest) -> bool:
+        """Whether the coefficient of ``mono`` is zero (``zero`` at its tracked magnitude)."""
+        c = self.terms.get(mono)
+        return c is None or zero(c, self.magnitude(mono))
+
     def order(self, weights: Sequence[int], zero: ZeroTest | None = None) -> int | None:
         """Least weighted degree of a nonzero term (``None`` for the zero polynomial)."""
         degs = [
             weighted_degree(m, weights)
             for m, c in self.terms.items()
-            if zero is None or not zero(c)
+            if zero is None or not zero(c, self.magnitude(m))
         ]
         return min(degs) if degs else None
 
     def homogeneous_part(self, weights: Sequence[int], d: int) -> Poly:
-        return Poly(
-            self.nvars, {m: c for m, c in self.terms.items() if weighted_degree(m, weights) == d}
+        return self._keep(
+            {m: c for m, c in self.terms.items() if weighted_degree(m, weights) == d}
         )
 
     def truncate(self, weights: Sequence[int], degree: int | None) -> Poly:
         if degree is None:
             return self
-        return Poly(
-            self.nvars,
+        return self._keep(
             {m: c for m, c in self.terms.items() if weighted_degree(m, weights) <= degree},
         )
 
     def drop_zeros(self, zero: ZeroTest) -> Poly:
-        return Poly(self.nvars, {m: c for m, c in self.terms.items() if not zero(c)})
+        return self._keep(
+            {m: c for m, c in self.terms.items() if not zero(c, self.magnitude(m))}
+        )
 
     # --- ring operations ----------------------------------------------------
-    def __add__(self, other: Poly) -> Poly:
+    def _sum(self, other: Poly, sign: int) -> Poly:
         terms = dict(self.terms)
         for m, c in other.terms.items():
-            terms[m] = terms[m] + c if m in terms else c
-        return Poly(self.nvars, terms)
+            if sign > 0:
+                terms[m] = terms[m] + c if m in terms else c
+            else:
+                terms[m] = terms[m] - c if m in terms else -c
+        if self.mags is None and other.mags is None:
+            return Poly(self.nvars, terms)
+        mags = {m: self._mag(m) for m in self.terms}
+        for m in other.terms:
+            mags[m] = mags.get(m, 0.0) + other._mag(m)
+        return Poly(self.nvars, terms, mags)
+
+    def __add__(self, other: Poly) -> Poly:
+        return self._sum(other, 1)
 
     def __sub__(self, other: Poly) -> Poly:
-        terms = dict(self.terms)
-        for m, c in other.terms.items():
-            terms[m] = terms[m] - c if m in terms else -c
-        return Poly(self.nvars, terms)
+        return self._sum(other, -1)
 
     def __neg__(self) -> Poly:
-        return Poly(self.nvars, {m: -c for m, c in self.terms.items()})
+        return self._keep({m: -c for m, c in self.terms.items()})
 
     def scale(self, c: object) -> Poly:
         c = se.S(c)
         if c == 0:
             return Poly(self.nvars)
-        return Poly(self.nvars, {m: c * v for m, v in self.terms.items()})
+        terms = {m: c * v for m, v in self.terms.items()}
+        if self.mags is None:
+            return Poly(self.nvars, terms)
+        k = _size(c)
+        return Poly(self.nvars, terms, {m: k * self._mag(m) for m in self.terms})
 
     def mul(
         self, other: Poly, weights: Sequence[int] | None = None, degree: int | None = None
@@ -255,6 +331,8 @@ class Poly:
         With a truncation, the terms of ``other`` are visited by increasing
         weighted degree and the scan stops at the first pair beyond ``degree``.
         """
+        if self.mags is not None or other.mags is not None:
+            return self._mul_tracked(other, weights, degree)
         terms: dict[Monomial, se.Basic] = {}
         get = terms.get
         add = operator.add
@@ -287,20 +365,42 @@ class Poly:
                 terms[m] = v if old is None else old + v
         return Poly(self.nvars, terms)
 
+    def _mul_tracked(
+        self, other: Poly, weights: Sequence[int] | None, degree: int | None
+    ) -> Poly:
+        """:meth:`mul` with the magnitudes: the sum of the products of the magnitudes."""
+        terms: dict[Monomial, se.Basic] = {}
+        mags: dict[Monomial, float] = {}
+        add = operator.add
+        for ma, ca in self.terms.items():
+            ka = self._mag(ma)
+            room = None if degree is None else degree - weighted_degree(ma, weights or ())
+            for mb, cb in other.terms.items():
+                if room is not None and weighted_degree(mb, weights or ()) > room:
+                    continue
+                m = tuple(map(add, ma, mb))
+                v = ca * cb
+                terms[m] = terms[m] + v if m in terms else v
+                mags[m] = mags.get(m, 0.0) + ka * other._mag(mb)
+        return Poly(self.nvars, terms, mags)
+
     def diff(self, k: int) -> Poly:
         """The partial derivative with respect to variable ``k`` (0-based)."""
         terms: dict[Monomial, se.Basic] = {}
+        mags: dict[Monomial, float] | None = None if self.mags is None else {}
         for m, c in self.terms.items():
             a = m[k]
             if a:
                 mm = list(m)
                 mm[k] = a - 1
                 terms[tuple(mm)] = c * a
-        return Poly(self.nvars, terms)
+                if mags is not None:
+                    mags[tuple(mm)] = a * self._mag(m)
+        return Poly(self.nvars, terms, mags)
 
     def restrict(self, keep: int) -> Poly:
         """Set the variables of index ``>= keep`` to 0."""
-        return Poly(self.nvars, {m: c for m, c in self.terms.items() if not any(m[keep:])})
+        return self._keep({m: c for m, c in self.terms.items() if not any(m[keep:])})
 
     def compose(
         self,
@@ -313,10 +413,13 @@ class Poly:
             return self
         nv = args[0].nvars
         powers: list[list[Poly]] = [[Poly.constant(nv, 1)] for _ in args]
-        out = Poly(nv)
         acc: dict[Monomial, se.Basic] = {}
+        tracked = self.mags is not None or any(a.mags is not None for a in args)
+        mags: dict[Monomial, float] = {}
         for mono, c in self.terms.items():
             term = Poly.constant(nv, c)
+            if tracked:
+                term = Poly(nv, term.terms, {(0,) * nv: self._mag(mono)})
             for k, a in enumerate(mono):
                 if not a:
                     continue
@@ -328,8 +431,9 @@ class Poly:
                     break
             for m, v in term.terms.items():
                 acc[m] = acc[m] + v if m in acc else v
-        out = Poly(nv, acc)
-        return out
+                if tracked:
+                    mags[m] = mags.get(m, 0.0) + term._mag(m)
+        return Poly(nv, acc, mags if tracked else None)
 
     # --- conversions ----------------------------------------------------------
     def to_symengine(self, symbols: Sequence[se.Symbol]) -> se.Basic:
@@ -545,6 +649,9 @@ def weighted_jets(
     tys = [t**w * y for w, y in zip(weights, ys, strict=True)]
     base: dict[se.Symbol, se.Basic] = {}
     if numeric:
+        # the map's coefficients that are rounding noise (negligible against their
+        # magnitudes) would enter the series as values: they are dropped first
+        args = [a.drop_zeros(ZeroTest()) if a.mags is not None else a for a in args]
         # symengine's series does not expand around float constants: expand around
         # symbols standing for the constant terms, then evaluate the coefficients.
         moved = []
@@ -583,8 +690,9 @@ def weighted_jets(
             ) from exc
         out.append(acc.truncate(weights, degree))
     if numeric:
+        # rounded once from the jet: each coefficient's magnitude is tracked from here on
         out = [
-            Poly(p.nvars, {m: se.RealDouble(to_double(c)) for m, c in p.terms.items()})
+            Poly(p.nvars, {m: se.RealDouble(to_double(c)) for m, c in p.terms.items()}, {})
             for p in out
         ]
     return out

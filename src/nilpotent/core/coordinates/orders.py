@@ -18,6 +18,7 @@ import symengine as se
 import sympy as sp
 
 from nilpotent.core.coordinates.jets import Poly, ZeroTest, lie_derivative, weighted_degree
+from nilpotent.core.decide.spans import NotEvaluable, is_zero
 from nilpotent.core.lie.brackets import (
     se_coordinates,
     se_lie_derivative,
@@ -31,15 +32,14 @@ from nilpotent.errors import OptionError, PointError
 Order = int | float
 """An order: a non-negative integer, or ``math.inf``."""
 
-ZERO_TOL = 1e-40
-"""Absolute size below which a 60-digit value that is not exactly decidable counts as 0."""
-
-
 def _is_zero(value: se.Basic) -> bool:
-    """Whether an exact number (symengine) is 0.
+    """Whether an exact number (symengine) is 0, decided by the one rank engine.
 
-    Rational and algebraic values are decided exactly; others (``cos(1)**2 +
-    sin(1)**2 - 1``) by a 60-digit evaluation against :data:`ZERO_TOL`.
+    :func:`nilpotent.core.decide.spans.is_zero`: exact for rational and algebraic
+    values, a certified ball (relative, at rising precision) proves a nonzero
+    value, however small (``exp(-100)``); a value still enclosed around 0 at
+    :data:`~nilpotent.core.decide.spans.MAX_PRECISION_BITS` bits without an exact
+    proof (``cos(1)**2 + sin(1)**2 - 1``) counts as 0.
     """
     if value == 0:
         return True
@@ -48,12 +48,11 @@ def _is_zero(value: se.Basic) -> bool:
         return False
     if v.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
         raise PointError(f"a derivative is undefined at the point ({v})")
-    approx = abs(sp.N(v, 60))
-    if approx > ZERO_TOL:
-        return False
-    if v.is_algebraic:
-        return bool(sp.simplify(v) == 0)
-    return True
+    try:
+        verdict = is_zero(value)
+    except NotEvaluable as exc:
+        raise PointError(f"a derivative cannot be evaluated at the point ({v}: {exc})") from exc
+    return True if verdict is None else verdict
 
 
 def _point_subs(sys: ControlSystem, point: Sequence[object] | None) -> dict:
@@ -244,7 +243,7 @@ def low_order_terms(
         for j, comp in enumerate(comps):
             for mono, c in comp.terms.items():
                 d = weighted_degree(mono, weights)
-                if d < weights[j] - 1 and not zero(c):
+                if d < weights[j] - 1 and not zero(c, comp.magnitude(mono)):
                     low[j] = min(low.get(j, d), d)
     return low
 
@@ -265,4 +264,4 @@ def chain_order_homogeneous(hat: Sequence[Sequence[Poly]], j: int, w: int, zero:
         level = nxt
         if not level:
             return False
-    return any(not zero(g.value_at_zero()) for g in level.values())
+    return any(not g.is_zero_at((0,) * n, zero) for g in level.values())

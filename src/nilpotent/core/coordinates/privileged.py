@@ -60,28 +60,35 @@ Certificate
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
-import symengine as se
 import sympy as sp
 
 from nilpotent import typeset
 from nilpotent.core.analysis.filtration import Filtration, analyze
 from nilpotent.core.coordinates.exponential_map import (
+    check_budget,
     exponential_map,
     first_kind_map,
     from_exponential_map,
+    series_budget,
+)
+from nilpotent.core.coordinates.frame_context import (
+    EXACT_TRIAL_BUDGET,
+    SERIES_METHODS,
+    FrameContext,
+    needs_floats,
+    rational_values,
 )
 from nilpotent.core.coordinates.jets import (
     Poly,
-    ZeroTest,
     lie_derivative,
     to_symengine,
     weighted_degree,
     weighted_jets,
 )
 from nilpotent.core.coordinates.orders import chain_order_homogeneous, low_order_terms
-from nilpotent.core.decide.spans import to_double
 from nilpotent.core.model.expressions import as_expr
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import (
@@ -235,79 +242,6 @@ class PrivilegedCoordinates:
         return typeset.privileged_display(self).html()
 
 
-# --- shared context ----------------------------------------------------------------
-
-
-class FrameContext:
-    """What every construction needs: frame matrices, fields in symengine, the zero test."""
-
-    def __init__(self, filtration: Filtration, numeric: bool) -> None:
-        sys = filtration.system
-        self.filtration = filtration
-        self.numeric = numeric
-        self.sys = sys
-        self.n = sys.n
-        self.weights = filtration.weights
-        self.step = filtration.step
-        self.xsyms = tuple(se.Symbol(str(c)) for c in sys.coordinates)
-        self.fields = tuple(
-            tuple(se.expand(to_symengine(e)) for e in f) for f in sys.specialized_fields
-        )
-        n = self.n
-        B = sp.Matrix(n, n, lambda j, k: filtration.frame_values[k][j])
-        if numeric:
-            self.p = tuple(_to_float(v) for v in filtration.point)
-            B = B.applyfunc(_to_float)
-            A = B.inv(method="LU")
-        else:
-            self.p = filtration.point
-            A = B.inv()
-            A = A.applyfunc(lambda e: sp.radsimp(e) if e.has(sp.Pow) else e)
-        self.B = sp.ImmutableMatrix(B)
-        self.A = sp.ImmutableMatrix(A)
-        self.Bse = [[to_symengine(B[j, k]) for k in range(n)] for j in range(n)]
-        self.Ase = [[to_symengine(A[j, k]) for k in range(n)] for j in range(n)]
-        self.zero = ZeroTest()
-
-    @staticmethod
-    def of(filtration: Filtration, numeric: bool = False) -> FrameContext:
-        cache = filtration.system._cache.setdefault("privileged.contexts", {})
-        key = (filtration.point, filtration.frame, numeric)
-        if key not in cache:
-            cache[key] = FrameContext(filtration, numeric)
-        return cache[key]
-
-    def x_of(self, inverse_poly: Sequence[Poly]) -> list[Poly]:
-        """$x = p + B\\chi(y)$ as polynomials in $y$."""
-        n = self.n
-        out = []
-        for k in range(n):
-            acc = Poly.constant(n, to_symengine(self.p[k]))
-            for l in range(n):
-                b = self.Bse[k][l]
-                if b != 0:
-                    acc = acc + inverse_poly[l].scale(b)
-            out.append(acc)
-        return out
-
-    def apply_A(self, vec: Sequence[Poly]) -> list[Poly]:
-        n = self.n
-        out = []
-        for j in range(n):
-            acc = Poly(vec[0].nvars)
-            for k in range(n):
-                a = self.Ase[j][k]
-                if a != 0 and vec[k].terms:
-                    acc = acc + vec[k].scale(a)
-            out.append(acc)
-        return out
-
-
-def _to_float(value: sp.Expr) -> sp.Float:
-    """A 15-digit float of an exact value (from a certified ball, :func:`spans.to_double`)."""
-    return sp.Float(to_double(value), 15)
-
-
 def _identity(n: int) -> tuple[Poly, ...]:
     return tuple(Poly.variable(n, k) for k in range(n))
 
@@ -333,12 +267,16 @@ def _fields_in(
         for j, f in enumerate(forward_poly)
     )
     if not linear:
-        jac = [
-            [forward_poly[j].diff(l).compose(inverse_poly, weights, degrees[j]) for l in range(n)]
-            for j in range(n)
-        ]
+        jac = []
+        for j in range(n):
+            row = []
+            for l in range(n):
+                check_budget(ctx)
+                row.append(forward_poly[j].diff(l).compose(inverse_poly, weights, degrees[j]))
+            jac.append(row)
     out = []
     for i in range(len(ctx.fields)):
+        check_budget(ctx)
         xz = ctx.apply_A(jets[i * n : (i + 1) * n])
         if linear:
             comps = [xz[j].truncate(weights, degrees[j]) for j in range(n)]
@@ -382,7 +320,7 @@ def _chain_order(
                 h = lie_derivative(X, g, ones, max_order - s).drop_zeros(ctx.zero)
                 if h.terms:
                     nxt.setdefault(frozenset(h.terms.items()), h)
-        if any(not ctx.zero(h.value_at_zero()) for h in nxt.values()):
+        if any(not h.is_zero_at((0,) * n, ctx.zero) for h in nxt.values()):
             return s
         level = nxt
         if not level:
@@ -469,8 +407,11 @@ def _algebraic(ctx: FrameContext) -> Built:
                     {
                         a: c
                         for a, c in G.terms.items()
-                        if sum(a) == k and weighted_degree(a, w) < wj and not ctx.zero(c)
+                        if sum(a) == k
+                        and weighted_degree(a, w) < wj
+                        and not ctx.zero(c, G.magnitude(a))
                     },
+                    G.mags,
                 )
                 g = g - h
         forward.append(g)
@@ -508,22 +449,6 @@ def coordinate_orders(coords: PrivilegedCoordinates) -> tuple[int | float, ...]:
     return orders
 
 
-def needs_floats(filtration: Filtration) -> bool:
-    """Whether exact arithmetic at the filtration's point would carry transcendental values.
-
-    True when the point has floats, or the values at $p$ of the fields or of the
-    frame words contain function values (``cos(1/5)``, ``exp(1)``) that exact
-    arithmetic cannot simplify.
-    """
-    p = filtration.point
-    if any(isinstance(v, sp.Float) or v.atoms(sp.Float) for v in p):
-        return True
-    at = dict(zip(filtration.system.coordinates, p, strict=True))
-    values = [v for f in filtration.frame_values for v in f]
-    values += [e.xreplace(at) for f in filtration.system.specialized_fields for e in f]
-    return any(v.atoms(sp.Function) or v.atoms(sp.Float) for v in values)
-
-
 def coordinate_names(sys: ControlSystem) -> tuple[sp.Symbol, ...]:
     """Symbols ``y1..yn`` for the privileged coordinates (another letter if the model uses them)."""
     taken = set(sys.coordinate_names) | {k for k, _ in sys.parameters}
@@ -542,7 +467,7 @@ def _to_sympy_in_x(ctx: FrameContext, polys: Sequence[Poly]) -> tuple[sp.Expr, .
     point = ctx.filtration.point  # exact, also in float mode: y(p) = 0 exactly
     shifts = [c - p if p != 0 else c for c, p in zip(ctx.sys.coordinates, point, strict=True)]
     return tuple(
-        f.compose(lin).drop_zeros(ctx.zero).to_sympy(shifts, keep_factors=ctx.numeric)
+        f.compose(lin).drop_zeros(ctx.zero_x).to_sympy(shifts, keep_factors=ctx.numeric)
         for f in polys
     )
 
@@ -573,8 +498,14 @@ def privileged_coordinates(
         (15 digits); ``None`` (default): exact unless the values of the fields
         or of the frame at $p$ involve transcendental function values
         (``cos(1/5)``) or floats, where exact arithmetic cannot simplify
-        ($\sin^2 + \cos^2$ is not recognised as 1) and expressions swell; the
-        result says which in ``numeric``.
+        ($\sin^2 + \cos^2$ is not recognised as 1) and expressions swell, and
+        for the exponential methods where exact arithmetic with irrational
+        values (``sqrt(3)/2``) would swell (at once from step 3, past
+        :data:`EXACT_TRIAL_BUDGET` seconds at step 2); the result says which
+        in ``numeric``.  Floating point never inverts the frame matrix by
+        elimination on rounded numbers: $A$ is the inverse of the exact $B$
+        enclosed in balls (pivoted, at rising precision) and rounded, checked
+        by a scale-free residual (:func:`~nilpotent.core.decide.evaluation.double_inverse`).
     max_length:
         Longest bracket length examined at $p$ (see
         :func:`~nilpotent.core.analysis.filtration.analyze`; default automatic, raised
@@ -634,6 +565,15 @@ def privileged_coordinates(
         )
     if numeric is None:
         numeric = needs_floats(f)
+        # exact irrational values (sqrt(3)/2): the series inverse may swell for minutes;
+        # exact arithmetic is tried for a short while, then floating point (below)
+        irrational = not numeric and method in SERIES_METHODS and not rational_values(f)
+        # step >= 3 swells past any budget (the kinematic snake at pi/3: > 600 s): floats
+        # at once; step 2 (the trident snake at 0, under a second) tries exact first
+        trial = irrational and f.step < 3
+        numeric = numeric or (irrational and not trial)
+    else:
+        trial = False
     ctx = FrameContext.of(f, numeric)
     if method == "auto":
         built = _linear(ctx)
@@ -645,8 +585,20 @@ def privileged_coordinates(
             orders, jets = _certified_orders(ctx, built[0], built[1])
     else:
         name = method
-        built = METHODS[method](ctx)
-        orders, jets = _certified_orders(ctx, built[0], built[1])
+        try:
+            with series_budget(ctx, EXACT_TRIAL_BUDGET if trial else None) if (
+                method in SERIES_METHODS
+            ) else nullcontext():
+                built = METHODS[method](ctx)
+                orders, jets = _certified_orders(ctx, built[0], built[1])
+        except ComputationLimitError:
+            if not trial:
+                raise
+            numeric = True
+            ctx = FrameContext.of(f, numeric)
+            with series_budget(ctx):
+                built = METHODS[method](ctx)
+                orders, jets = _certified_orders(ctx, built[0], built[1])
     assert orders is not None  # only quick=True returns None, and it was redone above
     bad = [(j, o, wj) for j, (o, wj) in enumerate(zip(orders, f.weights, strict=True)) if o != wj]
     names = coordinate_names(sys)
@@ -667,7 +619,7 @@ def privileged_coordinates(
         filtration=f,
         names=names,
         forward=_to_sympy_in_x(ctx, forward_poly),
-        inverse=tuple(e.drop_zeros(ctx.zero).to_sympy(names) for e in x_of_y),
+        inverse=tuple(e.drop_zeros(ctx.zero_x).to_sympy(names) for e in x_of_y),
         inverse_exact=inv_exact,
         inverse_order=inv_order,
         orders=tuple(int(o) for o in orders),

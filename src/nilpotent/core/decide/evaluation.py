@@ -29,6 +29,7 @@ from nilpotent.core.model.expressions import exact_decimals
 Scalar: TypeAlias = Any
 
 __all__ = [
+    "FLOAT_RELATIVE_TOLERANCE",
     "START_PRECISION_BITS",
     "Evaluator",
     "Inaccurate",
@@ -36,6 +37,7 @@ __all__ = [
     "NotRational",
     "SymbolicEvaluator",
     "ball",
+    "double_inverse",
     "exact_decimals",
     "exact_value",
     "to_double",
@@ -395,3 +397,103 @@ def to_double(e: object) -> float:
     if not b.is_finite():
         raise NotEvaluable(f"cannot evaluate {e}")
     return float(b.mid())
+
+
+FLOAT_RELATIVE_TOLERANCE = 1e-9
+"""Relative size below which a floating-point *measurement* counts as 0 (see :func:`negligible`)."""
+
+
+def negligible(value: float, scale: float, rel_tol: float = FLOAT_RELATIVE_TOLERANCE) -> bool:
+    r"""Whether a floating-point value counts as 0 relative to the ``scale`` it was computed at.
+
+    ``scale`` is the size of the terms whose sum the value is (the rounding error
+    of a sum is proportional to it, never to an absolute unit): the test
+    $|v| \le$ ``rel_tol`` $\cdot$ ``scale`` gives the same answer for a
+    computation scaled by $10^{300}$ or $e^{-100}$.  A value with no scale
+    (``scale <= 0``) is 0 only when it is exactly 0.
+    """
+    if value == 0.0:
+        return True
+    if not scale > 0.0:
+        return False
+    return abs(value) <= rel_tol * scale
+
+
+def double_inverse(entries: list[list[object]], max_precision: int = 1024) -> list[list[float]]:
+    r"""The inverse of a real matrix of exact constants, entrywise rounded to doubles.
+
+    The matrix is enclosed in balls (:func:`ball`) and inverted with arb's
+    Gaussian elimination with partial pivoting at rising precision, from
+    :data:`START_PRECISION_BITS` up to ``max_precision`` bits, until every entry
+    of the inverse is known to $2^{-60}$ relative to the largest term of its row
+    of $AB$; the result is the midpoints (0 for a ball around 0, negligible
+    there).  A residual check then requires
+    $|(\tilde A \tilde B - I)_{jk}| \le 10^{-9}\,(|\tilde A|\,|\tilde B|)_{jk}$
+    for the doubles $\tilde A$ and $\tilde B$ (scale-free: invariant under
+    scaling the rows of $A$ and the columns of $B$), so that what the float
+    computations use is an inverse of what they multiply.
+
+    Raises
+    ------
+    ZeroDivisionError
+        If the matrix is singular or its inverse cannot be enclosed within
+        ``max_precision`` bits, or the doubles fail the residual check (the
+        matrix is too ill-conditioned for double precision).
+    """
+    from flint import arb_mat
+
+    n = len(entries)
+    prec = START_PRECISION_BITS
+    while True:
+        with precision(prec):
+            try:
+                m = arb_mat([[ball(v, prec) for v in row] for row in entries])
+                inv = m.inv()
+            except ZeroDivisionError:
+                inv = None
+            if inv is not None and _tight_inverse(inv, m, n):
+                out = [
+                    [0.0 if inv[j, k].contains(0) else float(inv[j, k].mid()) for k in range(n)]
+                    for j in range(n)
+                ]
+                break
+        if prec >= max_precision:
+            raise ZeroDivisionError(
+                f"the matrix is singular or its inverse cannot be enclosed at {prec} bits"
+            )
+        prec *= 2
+    b = [[to_double(v) for v in row] for row in entries]
+    for j in range(n):
+        for k in range(n):
+            exact = 1.0 if j == k else 0.0
+            got = sum(out[j][l] * b[l][k] for l in range(n))
+            size = sum(abs(out[j][l] * b[l][k]) for l in range(n))
+            if abs(got - exact) > FLOAT_RELATIVE_TOLERANCE * size:
+                raise ZeroDivisionError(
+                    "the matrix is too ill-conditioned for double precision (residual "
+                    f"{abs(got - exact):.3g} at entry ({j}, {k}))"
+                )
+    return out
+
+
+def _tight_inverse(inv: Any, m: Any, n: int) -> bool:
+    r"""Whether each entry of the ball inverse is known to $2^{-60}$ of its row's scale.
+
+    The scale of entry $(j, k)$ is the largest term $|A_{jk'}|\max_l|B_{k'l}|$ of
+    row $j$ of $AB$, divided by $\max_l |B_{kl}|$: an entry that is 0 (a ball
+    around 0) passes when it is negligible there, and the test does not depend
+    on the units of the coordinates or the scale of the frame.
+    """
+    tiny = arb(2) ** -60
+    bmax = [max((m[k, l].abs_upper() for l in range(n)), default=arb(0)) for k in range(n)]
+    for j in range(n):
+        row = max(
+            (inv[j, k].abs_upper() * bmax[k] for k in range(n)), default=arb(0)
+        )
+        if not row > 0:
+            return False
+        for k in range(n):
+            x = inv[j, k]
+            if not x.is_finite() or not x.rad() * bmax[k] <= tiny * row:
+                return False
+    return True

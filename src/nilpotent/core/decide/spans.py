@@ -52,6 +52,7 @@ import sympy as sp
 from flint import arb, arb_mat, fmpq, fmpq_mat
 
 from nilpotent.core.decide.evaluation import (
+    FLOAT_RELATIVE_TOLERANCE,
     START_PRECISION_BITS,
     Evaluator,
     Inaccurate,
@@ -60,6 +61,7 @@ from nilpotent.core.decide.evaluation import (
     SymbolicEvaluator,
     ball,
     exact_value,
+    negligible,
     precision,
     to_double,
 )
@@ -67,6 +69,7 @@ from nilpotent.core.model.expressions import exact_decimals
 
 __all__ = [
     "ALGEBRAIC_BUDGET",
+    "FLOAT_RELATIVE_TOLERANCE",
     "MAX_PRECISION_BITS",
     "START_PRECISION_BITS",
     "Decision",
@@ -83,6 +86,7 @@ __all__ = [
     "exact_decimals",
     "exact_value",
     "is_zero",
+    "negligible",
     "numeric_rank",
     "rank",
     "to_double",
@@ -441,7 +445,7 @@ class MeasuredSpan:
     ``rel_tol``.  :attr:`rank` counts the kept vectors.
     """
 
-    def __init__(self, rel_tol: float = 1e-9) -> None:
+    def __init__(self, rel_tol: float = FLOAT_RELATIVE_TOLERANCE) -> None:
         self.rel_tol = rel_tol
         self.keys: dict[Key, int] = {}
         self.basis: list[dict[Key, float]] = []
@@ -470,7 +474,9 @@ class MeasuredSpan:
         return True
 
 
-def numeric_rank(rows: Sequence[Sequence[float]], rel_tol: float = 1e-9) -> int:
+def numeric_rank(
+    rows: Sequence[Sequence[float]], rel_tol: float = FLOAT_RELATIVE_TOLERANCE
+) -> int:
     """Rank of a matrix of floating-point *measurements* (not exact values).
 
     Scale-invariant: each row is normalised to unit norm, then a vector counts
