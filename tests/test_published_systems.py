@@ -327,8 +327,6 @@ FLOAT_MODE = {
 
 
 @pytest.mark.slow  # up to 13 s for the certificate's report of the snake
-@pytest.mark.xfail(reason="issue 23 items 1-2: float-mode frame inverse in core/privileged.py",
-                   strict=False)
 @pytest.mark.parametrize("case", sorted(FLOAT_MODE))
 def test_certified_approximation_at_float_mode_points(case):
     name, at = FLOAT_MODE[case]
