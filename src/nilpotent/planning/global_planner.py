@@ -154,7 +154,7 @@ class GlobalPlan:
         (undefined numbers are null, ``null_reasons`` says why)."""
         v = self.verification
         out = self.plan.to_json()
-        reasons: dict[str, str] = {}
+        reasons: dict[str, str] = dict(self.plan.length_fields[1])
         if v.clearance is None:
             reasons["clearance"] = "no world given: no obstacles to measure against"
         if v.min_singular_margin is None:
@@ -443,6 +443,7 @@ def plan_global(
     clearance: float = 0.0,
     path_clearance: float = PATH_CLEARANCE,
     hold_shape: bool = True,
+    objective: str = "reach",
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -488,6 +489,10 @@ def plan_global(
         (:func:`shape_held_path`; a quarter of the remaining time), then, if that
         fails, in the whole configuration space.  A path whose shape wanders
         forces every piece to correct it with loops of size ``√(piece length)``.
+    objective:
+        The local steering's objective, ``"reach"`` or ``"length"``
+        (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
+        :func:`~nilpotent.planning.iterative.plan`).
 
     Raises
     ------
@@ -505,7 +510,7 @@ def plan_global(
     if not (max_piece > 0 and math.isfinite(max_piece)):
         raise PlanningError(f"max_piece must be > 0, got {max_piece}")
     options: dict[str, Any] = {"engine": engine, "anchor": anchor,
-                               "max_iterations": max_iterations}
+                               "max_iterations": max_iterations, "objective": objective}
     checker = Checker(sys, world, limits, singular_margin, clearance)
     assert checker.limits is not None
     x0 = np.array([float(v) for v in start])  # type: ignore[arg-type]

@@ -31,6 +31,7 @@ import math
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -44,6 +45,7 @@ from nilpotent.planning.controls import (
     from_coefficients,
     reverse_segments,
 )
+from nilpotent.planning.length import length_report, method_for
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
 from nilpotent.planning.simulation import simulate_candidates, simulate_plan, single_engine
@@ -187,7 +189,20 @@ class Plan:
                 for it in self.iterations
             ],
             "segments": [s.to_dict() for s in self.segments],
+            **self.length_fields[0],
+            **({"null_reasons": self.length_fields[1]} if self.length_fields[1] else {}),
         }
+
+    @cached_property
+    def length_fields(self) -> tuple[dict[str, Any], dict[str, str]]:
+        """``length`` (``∫‖u‖ dt``), ``lower_bound``, ``lower_bound_kind``, ``length_ratio``
+        and the reasons for the null ones (:func:`nilpotent.planning.length.length_report`)."""
+        return length_report(self.system, self.start, self.goal, self.segments)
+
+    @property
+    def length(self) -> float:
+        """The sub-Riemannian length ``∫‖u(t)‖₂ dt`` of the controls (``X_i`` orthonormal)."""
+        return float(self.length_fields[0]["length"])
 
     # --- display (nilpotent.typeset) -------------------------------------------------
     def to_latex(self) -> str:
@@ -393,6 +408,7 @@ def plan(
     engine: str = "auto",
     refine: bool = True,
     handover: float | None = None,
+    objective: str = "reach",
 ) -> Plan:
     """Steer ``sys`` from ``start`` to ``goal`` by iterated nilpotent steering.
 
@@ -446,6 +462,11 @@ def plan(
         systems of step ≥ 3 (their nilpotent convergence order ``1 + 1/r`` is
         slow, Newton's is quadratic) when the compiled integrator is used (a
         refinement step integrates ``P + 1`` trajectories), else 0.
+    objective:
+        What the local steering optimises (:data:`nilpotent.planning.length.OBJECTIVES`):
+        ``"reach"`` (default: straight segment and loops, or Newton) or
+        ``"length"`` (the shortest normal geodesic of each step-2 approximation;
+        step ≤ 2 only).
 
     Raises
     ------
@@ -462,6 +483,7 @@ def plan(
     True
     """
     t_start = time.perf_counter()
+    method = method_for(objective, method)
     if anchor != "auto" and anchor not in ANCHORS:
         raise PlanningError(f"unknown anchor {anchor!r} (choose from auto, {', '.join(ANCHORS)})")
     if builder != "auto" and builder not in BUILDERS:
