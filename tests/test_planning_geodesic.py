@@ -171,7 +171,8 @@ def test_free_36_geodesic_is_locally_shortest() -> None:
         h = np.zeros(3)
         v = np.zeros(3)
         for u in flat.reshape(k, 3):
-            v += np.array([h[a] * u[b] - h[b] * u[a] for a, b in ((0, 1), (0, 2), (1, 2))]) / (2 * k)
+            pairs = ((0, 1), (0, 2), (1, 2))
+            v += np.array([h[a] * u[b] - h[b] * u[a] for a, b in pairs]) / (2 * k)
             h = h + u / k
         return np.concatenate([h, v])
 
