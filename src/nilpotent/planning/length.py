@@ -10,11 +10,12 @@
 ``lower_bound`` is the sub-Riemannian distance from start to goal of the
 nilpotent approximation at the start, computed as the length of the shortest
 normal geodesic found (:func:`~nilpotent.planning.geodesic.shortest_geodesic`).
-For a system that *is* nilpotent in its coordinates (``heisenberg``) this is the
-exact distance of the system, so ``length ≥ lower_bound`` holds for every plan.
-For other systems it is the distance of the first-order approximation: equal
-to the true distance to first order in the distance, not a certified bound
-(``lower_bound_kind`` says which).  ``null`` (with a reason) for step ≥ 3, at
+Where the approximation reproduces the system (its fields agree with the
+system's at the goal and at seeded random points, to 1e-12: ``heisenberg``)
+this is the exact distance of the system, so ``length ≥ lower_bound`` holds for
+every plan (``lower_bound_kind = "exact"``).  For other systems it is the
+distance of the first-order approximation: equal to the true distance to first
+order in the distance, not a certified bound (``"approximation"``).  ``null`` (with a reason) for step ≥ 3, at
 singular points, or when no geodesic converged.
 """
 
