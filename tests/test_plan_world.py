@@ -468,7 +468,7 @@ def test_shape_coordinates_are_the_limited_non_position_ones():
 
 
 def test_held_ompl_path_keeps_the_shape_and_is_admissible():
-    from nilpotent.planning.global_planner import ompl_path
+    from nilpotent.planning.holonomic_path import ompl_path
 
     checker = Checker(get_model("trident-snake"), world_from_dict(DOORWAY))
     start = np.array([-3.0, 2.5, 0.4, 0.3, -0.2, 0.1])

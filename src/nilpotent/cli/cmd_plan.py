@@ -70,6 +70,13 @@ MaxItOpt = Annotated[
                  parser=bounded_int("--max-iterations", 1, MAX_ITERATIONS)),
 ]
 
+ObjectiveOpt = Annotated[
+    str,
+    typer.Option("--objective", metavar="WHAT",
+                 help="Local steering: reach (straight segment and loops, default) or length "
+                      "(shortest geodesics of the step-2 approximation)."),
+]
+
 
 ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
 
@@ -150,6 +157,7 @@ def plan_command(
     max_piece: MaxPieceOpt = 1.0,
     anchor: AnchorOpt = "auto",
     max_iterations: MaxItOpt = 30,
+    objective: ObjectiveOpt = "reach",
     plot: PlotOpt = None,
     animate: AnimateOpt = None,
     json_out: JsonOpt = False,
@@ -164,6 +172,7 @@ def plan_command(
     u_i(t) = constant + Σ_k cos[k-1]·cos(kωt) + sin[k-1]·sin(kωt).
     """
     from nilpotent.planning.iterative import ANCHORS
+    from nilpotent.planning.length import OBJECTIVES
 
     if not (math.isfinite(tol) and tol > 0):
         raise OptionError(f"--tol must be a positive number, got {tol}")
@@ -172,6 +181,9 @@ def plan_command(
             f"--anchor must be auto, {', '.join(ANCHORS)}; got {literal(anchor, 60)!r}")
     if max_iterations < 1:
         raise OptionError(f"--max-iterations must be >= 1, got {max_iterations}")
+    if objective not in OBJECTIVES:
+        raise OptionError(
+            f"--objective must be {' or '.join(OBJECTIVES)}; got {literal(objective, 60)!r}")
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
     if not (math.isfinite(max_piece) and max_piece > 0):
@@ -184,7 +196,7 @@ def plan_command(
         result = plan_from_options(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,
-            clearance=clearance,
+            clearance=clearance, objective=objective,
         )
     write_pictures(result, plot, animate)
     if json_out:

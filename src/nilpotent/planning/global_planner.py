@@ -56,6 +56,7 @@ from nilpotent.errors import (
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
+from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
 from nilpotent.planning.simulation import simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_segments
@@ -77,8 +78,6 @@ PATH_CLEARANCE = 0.2
 PATH_END_ZONE = 1.0
 #: Default longest piece (Euclidean in configuration space) before steering.
 MAX_PIECE = 1.0
-#: Longest time OMPL's path simplification (shortcutting) may take.
-SIMPLIFY_SECONDS = 0.5
 #: Pieces are not halved below this length: then planning fails.
 MIN_PIECE = 1e-3
 #: Most pieces a global path is cut into (each steered on its own, in 0.1-1 s; memory).
@@ -164,7 +163,7 @@ class GlobalPlan:
         (undefined numbers are null, ``null_reasons`` says why)."""
         v = self.verification
         out = self.plan.json_fields()
-        reasons: dict[str, str] = {}
+        reasons: dict[str, str] = dict(self.plan.length_fields[1])
         if v.clearance is None:
             reasons["clearance"] = "no world given: no obstacles to measure against"
         if v.min_singular_margin is None:
@@ -214,112 +213,6 @@ def plan_json(out: dict[str, Any], reasons: dict[str, str] | None = None) -> dic
     if reasons:
         clean["null_reasons"] = dict(reasons)
     return clean
-
-
-def _box(
-    checker: Checker, x0: np.ndarray, xg: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The configuration-space box OMPL samples in (limits, world bounds, else around the chord)."""
-    names = checker.system.coordinate_names
-    lo = np.minimum(x0, xg)
-    hi = np.maximum(x0, xg)
-    pad = np.maximum(math.pi, 0.5 * float(np.linalg.norm(xg - x0)))
-    lo, hi = lo - pad, hi + pad
-    world = checker.world
-    if world is not None and world.bounds is not None:
-        for axis, name in enumerate(("x", "y")):
-            if name in names:
-                j = names.index(name)
-                lo[j], hi[j] = world.bounds[axis]
-    assert checker.limits is not None
-    for name, a, b in checker.limits.bounds:
-        j = names.index(name)
-        lo[j], hi[j] = a, b
-    return lo, hi
-
-
-def ompl_path(
-    checker: Checker,
-    x0: np.ndarray,
-    xg: np.ndarray,
-    seconds: float,
-    seed: int | None = None,
-    resolution: float = 0.05,
-    valid: Callable[[np.ndarray], np.ndarray] | None = None,
-    held: Sequence[int] = (),
-) -> list[np.ndarray]:
-    """A collision-free configuration-space path from OMPL RRTConnect, simplified.
-
-    ``resolution``: largest step (configuration-space units) at which OMPL checks
-    straight motions between states.  ``valid``: the validity of a batch of
-    configurations (default ``checker.valid``; ``checker`` also gives the box).
-    ``held``: indices of coordinates kept at ``x0``'s values all along (OMPL
-    samples only the others; ``xg`` must agree with ``x0`` there).
-
-    Raises
-    ------
-    PlanningError
-        No exact solution within ``seconds``.
-    """
-    from ompl import base as ob
-    from ompl import geometric as og
-    from ompl import util as ou
-
-    ou.setLogLevel(ou.LogLevel.LOG_NONE)
-    if seed is not None:
-        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
-    full_n = len(x0)
-    held_set = set(int(j) for j in held)
-    if any(x0[j] != xg[j] for j in held_set):
-        raise ValueError("held coordinates must agree at the start and the goal")
-    free = np.array([j for j in range(full_n) if j not in held_set], dtype=int)
-    lo, hi = _box(checker, x0, xg)
-    lo, hi = lo[free], hi[free]
-    n = len(free)
-    space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    for j in range(n):
-        bounds.setLow(j, float(lo[j]))
-        bounds.setHigh(j, float(hi[j]))
-    space.setBounds(bounds)
-    setup = og.SimpleSetup(space)
-
-    is_valid = checker.valid if valid is None else valid
-
-    def embed(values: Sequence[float]) -> np.ndarray:
-        q = x0.astype(float).copy()
-        q[free] = values
-        return q
-
-    def state_valid(state: Any) -> bool:
-        q = embed([state[j] for j in range(n)])
-        return bool(is_valid(q[None, :])[0])
-
-    setup.setStateValidityChecker(state_valid)
-    extent = float(np.linalg.norm(hi - lo))
-    setup.getSpaceInformation().setStateValidityCheckingResolution(
-        min(0.05, resolution / max(extent, 1e-12))
-    )
-    start, goal = space.allocState(), space.allocState()
-    # OMPL's stubs type allocState() as the abstract State; a real-vector state is indexable
-    for j in range(n):
-        start[j], goal[j] = float(x0[free[j]]), float(xg[free[j]])  # pyright: ignore[reportIndexIssue]
-    setup.setStartAndGoalStates(start, goal)
-    setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
-    status = setup.solve(float(seconds))
-    if not (status and setup.haveExactSolutionPath()):
-        raise PlanningError(
-            f"no collision-free path from OMPL RRTConnect within {seconds:.3g} s "
-            f"(status: {status.asString() if hasattr(status, 'asString') else status}); "
-            "raise --time-limit, or check that start and goal are connected in the free space"
-        )
-    # shortcutting until it converges can take seconds of validity checks: bounded
-    setup.simplifySolution(float(min(SIMPLIFY_SECONDS, seconds)))
-    path = setup.getSolutionPath()
-    states = [path.getState(i) for i in range(path.getStateCount())]
-    pts = [embed([s[j] for j in range(n)]) for s in states]  # pyright: ignore[reportIndexIssue]
-    pts[0], pts[-1] = x0.copy(), xg.copy()
-    return pts
 
 
 def shape_indices(checker: Checker) -> tuple[int, ...]:
@@ -466,6 +359,7 @@ def plan_global(
     clearance: float = 0.0,
     path_clearance: float = PATH_CLEARANCE,
     hold_shape: bool = True,
+    objective: str = "reach",
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -511,6 +405,10 @@ def plan_global(
         (:func:`shape_held_path`; a quarter of the remaining time), then, if that
         fails, in the whole configuration space.  A path whose shape wanders
         forces every piece to correct it with loops of size ``√(piece length)``.
+    objective:
+        The local steering's objective, ``"reach"`` or ``"length"``
+        (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
+        :func:`~nilpotent.planning.iterative.plan`).
 
     Raises
     ------
@@ -531,8 +429,7 @@ def plan_global(
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
             max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
-            path_clearance=path_clearance, hold_shape=hold_shape,
-        )
+            path_clearance=path_clearance, hold_shape=hold_shape, objective=objective)
 
 
 def _plan_global(
@@ -554,6 +451,7 @@ def _plan_global(
     clearance: float,
     path_clearance: float,
     hold_shape: bool,
+    objective: str,
 ) -> GlobalPlan:
     t0 = time.perf_counter()
     if not (tol > 0 and math.isfinite(tol)):
@@ -561,7 +459,7 @@ def _plan_global(
     if not (max_piece > 0 and math.isfinite(max_piece)):
         raise PlanningError(f"max_piece must be > 0, got {max_piece}")
     options: dict[str, Any] = {"engine": engine, "anchor": anchor,
-                               "max_iterations": max_iterations}
+                               "max_iterations": max_iterations, "objective": objective}
     checker = Checker(sys, world, limits, singular_margin, clearance)
     assert checker.limits is not None
     x0 = np.array([float(v) for v in start])  # type: ignore[arg-type]

@@ -31,6 +31,7 @@ import math
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -45,6 +46,7 @@ from nilpotent.planning.controls import (
     from_coefficients,
     reverse_segments,
 )
+from nilpotent.planning.length import length_report, method_for
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
 from nilpotent.planning.simulation import simulate_candidates, simulate_plan, single_engine
@@ -200,7 +202,20 @@ class Plan:
                 for it in self.iterations
             ],
             "segments": [s.to_dict() for s in self.segments],
+            **self.length_fields[0],
+            **({"null_reasons": self.length_fields[1]} if self.length_fields[1] else {}),
         }
+
+    @cached_property
+    def length_fields(self) -> tuple[dict[str, Any], dict[str, str]]:
+        """``length`` (``∫‖u‖ dt``), ``lower_bound``, ``lower_bound_kind``, ``length_ratio``
+        and the reasons for the null ones (:func:`nilpotent.planning.length.length_report`)."""
+        return length_report(self.system, self.start, self.goal, self.segments)
+
+    @property
+    def length(self) -> float:
+        """The sub-Riemannian length ``∫‖u(t)‖₂ dt`` of the controls (``X_i`` orthonormal)."""
+        return float(self.length_fields[0]["length"])
 
     # --- display (nilpotent.typeset) -------------------------------------------------
     def to_latex(self) -> str:
@@ -414,6 +429,7 @@ def plan(
     refine: bool = True,
     handover: float | None = None,
     time_limit: float = math.inf,
+    objective: str = "reach",
 ) -> Plan:
     """Steer ``sys`` from ``start`` to ``goal`` by iterated nilpotent steering.
 
@@ -473,6 +489,11 @@ def plan(
         Seconds the whole plan may take (default: no limit); every step, the
         integrations included, is bounded by it
         (:func:`nilpotent.planning.budget.time_budget`).
+    objective : str
+        What the local steering optimises (:data:`nilpotent.planning.length.OBJECTIVES`):
+        ``"reach"`` (default: straight segment and loops, or Newton) or
+        ``"length"`` (the shortest normal geodesic of each step-2 approximation;
+        step ≤ 2 only).
 
     Raises
     ------
@@ -496,7 +517,7 @@ def plan(
         return _plan(sys, start, goal, tol, max_iterations=max_iterations, anchor=anchor,
                      builder=builder, method=method, raise_on_failure=raise_on_failure,
                      trajectory_points=trajectory_points, engine=engine, refine=refine,
-                     handover=handover)
+                     handover=handover, objective=objective)
 
 
 def _plan(
@@ -514,8 +535,10 @@ def _plan(
     engine: str,
     refine: bool,
     handover: float | None,
+    objective: str,
 ) -> Plan:
     t_start = time.perf_counter()
+    method = method_for(objective, method)
     if anchor != "auto" and anchor not in ANCHORS:
         raise PlanningError(f"unknown anchor {anchor!r} (choose from auto, {', '.join(ANCHORS)})")
     if builder != "auto" and builder not in BUILDERS:

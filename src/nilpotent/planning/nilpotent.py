@@ -272,10 +272,18 @@ def _newton(system: TriangularSystem, ys: np.ndarray, yg: np.ndarray, seed: int)
     return _unflatten(best_theta, template, harmonics, m)
 
 
+def _geodesic(system: TriangularSystem, ys: np.ndarray, yg: np.ndarray, seed: int) -> list[Segment]:
+    from nilpotent.planning.geodesic import geodesic_segments  # imports this module's types
+
+    return geodesic_segments(system, ys, yg, seed)
+
+
 #: Steering methods by name: ``f(system, y_start_unit, y_goal_unit, seed) -> segments``.
+#: ``"geodesic"``: the shortest normal geodesic, step ≤ 2 (:mod:`nilpotent.planning.geodesic`).
 METHODS: dict[str, Callable[[TriangularSystem, np.ndarray, np.ndarray, int], list[Segment]]] = {
     "step2": lambda system, ys, yg, seed: _closed_form(system, ys, yg),
     "newton": _newton,
+    "geodesic": _geodesic,
 }
 
 
@@ -300,7 +308,8 @@ def steer_nilpotent(
     y_start, y_goal:
         Points in those coordinates.
     method:
-        ``"step2"`` (closed form; step ≤ 2), ``"newton"`` (any step) or
+        ``"step2"`` (closed form; step ≤ 2), ``"newton"`` (any step),
+        ``"geodesic"`` (shortest, step ≤ 2) or
         ``"auto"`` (``"step2"`` when the step is ≤ 2, else ``"newton"``).
     seed:
         Seed of the random restarts of ``"newton"`` (results are reproducible).
@@ -332,9 +341,9 @@ def steer_nilpotent(
         method = "step2" if system.step <= 2 else "newton"
     if method not in METHODS:
         raise PlanningError(f"unknown steering method {method!r} (known: {', '.join(METHODS)})")
-    if method == "step2" and system.step > 2:
+    if method in ("step2", "geodesic") and system.step > 2:
         raise PlanningError(
-            f"the closed-form 'step2' method needs step <= 2; this system has step {system.step}"
+            f"the {method!r} method needs step <= 2; this system has step {system.step}"
         )
     ys = np.asarray(y_start, dtype=float)
     yg = np.asarray(y_goal, dtype=float)

@@ -1,0 +1,142 @@
+"""Benchmark of plan quality: lengths against the exact sub-Riemannian distance, and speed.
+
+Heisenberg (``heisenberg`` model: ``ẋ₃ = (x₁u₂ − x₂u₁)/2``), seeded random goals
+(normal directions, sizes uniform in [0.1, 2]); the exact distance is Dido's
+closed form (an arc of angle φ with ``|x₃|/r² = (φ − sin φ)/(8 sin²(φ/2))``,
+``d = rφ/(2 sin(φ/2))``), implemented here independently of the product.
+
+* ``reach``: today's local steering (``steer_nilpotent``, straight segment + loops);
+* ``length``: the shortest-geodesic steering (``method="geodesic"``);
+* ``shooting``: the named baseline, ``scipy.optimize.minimize`` (SLSQP) on a
+  direct-shooting discretisation (16 piecewise-constant controls, the Heisenberg
+  flow of each piece exact by hand), minimising ``Σ‖u_k‖²`` under the endpoint
+  constraint, from the straight line plus a seeded perturbation;
+
+each as a warm local steering call (median time over the goals, after one warm-up
+call), and the length / exact distance ratio.  Then whole plans
+(:func:`nilpotent.planning.plan`, both objectives) on the true model: Heisenberg
+(ratio to the exact distance) and the trident snake (ratio to the geodesic
+distance of its free (3,6) approximation at the start, ``lower_bound``).
+
+Usage: ``PYTHONPATH=src python benchmarks/plan_quality.py [--goals 20] [--trident 5]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import time
+
+import numpy as np
+import sympy as sp
+from scipy.optimize import brentq, minimize
+
+from nilpotent.models import get_model
+from nilpotent.planning import TriangularSystem, plan, steer_nilpotent
+from nilpotent.planning.geodesic import control_length
+
+
+def heisenberg_distance(x1: float, x2: float, x3: float) -> float:
+    r, z = math.hypot(x1, x2), abs(x3)
+    if r == 0:
+        return math.sqrt(4 * math.pi * z)
+    if z == 0:
+        return r
+    q = z / r**2
+    phi = brentq(lambda p: (p - math.sin(p)) / (8 * math.sin(p / 2) ** 2) - q,
+                 1e-9, 2 * math.pi - 1e-12, xtol=1e-15)
+    return r * phi / (2 * math.sin(phi / 2))
+
+
+def shooting(goal: np.ndarray, k: int, rng: np.random.Generator) -> float:
+    """Length of the SLSQP direct-shooting solution (piecewise constant, k pieces)."""
+
+    def end(flat: np.ndarray) -> np.ndarray:
+        u = flat.reshape(k, 2)
+        h = np.vstack([np.zeros(2), np.cumsum(u, axis=0) / k])[:-1]
+        z = np.sum(h[:, 0] * u[:, 1] - h[:, 1] * u[:, 0]) / (2 * k)
+        return np.array([*(h[-1] + u[-1] / k), z])
+
+    guess = np.tile(goal[:2], (k, 1)) + 0.3 * rng.normal(size=(k, 2))
+    res = minimize(lambda f: float(np.sum(f**2)) / k, guess.ravel(), method="SLSQP",
+                   constraints={"type": "eq", "fun": lambda f: end(f) - goal},
+                   options={"maxiter": 300, "ftol": 1e-12})
+    if np.max(np.abs(end(res.x) - goal)) > 1e-8:
+        return math.inf
+    return float(np.sum(np.linalg.norm(res.x.reshape(k, 2), axis=1)) / k)
+
+
+def timed(fn, *args, **kwargs):
+    t = time.perf_counter()
+    out = fn(*args, **kwargs)
+    return out, time.perf_counter() - t
+
+
+def summary(name: str, ratios: list[float], seconds: list[float]) -> str:
+    return (f"| {name} | {statistics.median(ratios):.4f} | {max(ratios):.4f} | "
+            f"{1e3 * statistics.median(seconds):.2f} |")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--goals", type=int, default=20)
+    ap.add_argument("--trident", type=int, default=5)
+    ap.add_argument("--seed", type=int, default=19)
+    args = ap.parse_args()
+    rng = np.random.default_rng(args.seed)
+    goals = [rng.normal(size=3) * rng.uniform(0.1, 2.0) for _ in range(args.goals)]
+    y = sp.symbols("y1 y2 y3")
+    heis = TriangularSystem.from_fields(((1, 0, -y[1] / 2), (0, 1, y[0] / 2)), y, (1, 1, 2))
+    dist = [heisenberg_distance(*g) for g in goals]
+
+    print("## local steering, Heisenberg (warm calls)")
+    print("| method | median length/d | max length/d | median ms/call |")
+    print("|---|---|---|---|")
+    for method in ("step2", "geodesic"):
+        steer_nilpotent(heis, np.zeros(3), goals[0], method=method)  # warm-up
+        ratios, secs = [], []
+        for g, d in zip(goals, dist, strict=True):
+            s, dt = timed(steer_nilpotent, heis, np.zeros(3), g, method=method)
+            assert s.error < 1e-10
+            ratios.append(control_length(s.segments) / d)
+            secs.append(dt)
+        print(summary("reach (loops)" if method == "step2" else "length (geodesic)", ratios,
+                      secs))
+    ratios, secs = [], []
+    for g, d in zip(goals, dist, strict=True):
+        length, dt = timed(shooting, g, 16, rng)
+        ratios.append(length / d)
+        secs.append(dt)
+    print(summary("baseline: SLSQP direct shooting (16 pieces)", ratios, secs))
+
+    print("\n## whole plans (true model, re-simulated)")
+    print("| model | objective | median length/bound | max length/bound | median s/plan |")
+    print("|---|---|---|---|---|")
+    h = get_model("heisenberg")
+    plan(h, (0, 0, 0), goals[0])  # warm-up (compiles)
+    for objective in ("reach", "length"):
+        ratios, secs = [], []
+        for g, d in zip(goals, dist, strict=True):
+            p, dt = timed(plan, h, (0, 0, 0), g, objective=objective)
+            ratios.append(p.length / d)
+            secs.append(dt)
+        print(f"| heisenberg | {objective} | {statistics.median(ratios):.4f} | "
+              f"{max(ratios):.4f} | {statistics.median(secs):.3f} |")
+    if args.trident:
+        tri = get_model("trident-snake")
+        tgoals = [rng.uniform(-0.15, 0.15, size=6) for _ in range(args.trident)]
+        plan(tri, (0,) * 6, tgoals[0])
+        for objective in ("reach", "length"):
+            ratios, secs = [], []
+            for g in tgoals:
+                p, dt = timed(plan, tri, (0,) * 6, g, objective=objective)
+                fields = p.length_fields[0]
+                ratios.append(fields["length"] / fields["lower_bound"])
+                secs.append(dt)
+            print(f"| trident-snake | {objective} | {statistics.median(ratios):.4f} | "
+                  f"{max(ratios):.4f} | {statistics.median(secs):.3f} |")
+
+
+if __name__ == "__main__":
+    main()

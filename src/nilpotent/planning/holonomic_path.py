@@ -1,0 +1,126 @@
+"""The holonomic stage of global planning: a path of the configuration space between two
+configurations, found by OMPL (RRTConnect in a box around them, every configuration checked
+by the planner's validity check), before it is cut into pieces and steered
+(:func:`nilpotent.planning.global_planner.plan_global`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from nilpotent.errors import PlanningError
+from nilpotent.planning.verify import Checker
+
+__all__ = ["SIMPLIFY_SECONDS", "ompl_path"]
+
+#: Longest time OMPL's path simplification (shortcutting) may take.
+SIMPLIFY_SECONDS = 0.5
+
+
+def _box(
+    checker: Checker, x0: np.ndarray, xg: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The configuration-space box OMPL samples in (limits, world bounds, else around the chord)."""
+    names = checker.system.coordinate_names
+    lo = np.minimum(x0, xg)
+    hi = np.maximum(x0, xg)
+    pad = np.maximum(math.pi, 0.5 * float(np.linalg.norm(xg - x0)))
+    lo, hi = lo - pad, hi + pad
+    world = checker.world
+    if world is not None and world.bounds is not None:
+        for axis, name in enumerate(("x", "y")):
+            if name in names:
+                j = names.index(name)
+                lo[j], hi[j] = world.bounds[axis]
+    assert checker.limits is not None
+    for name, a, b in checker.limits.bounds:
+        j = names.index(name)
+        lo[j], hi[j] = a, b
+    return lo, hi
+
+
+def ompl_path(
+    checker: Checker,
+    x0: np.ndarray,
+    xg: np.ndarray,
+    seconds: float,
+    seed: int | None = None,
+    resolution: float = 0.05,
+    valid: Callable[[np.ndarray], np.ndarray] | None = None,
+    held: Sequence[int] = (),
+) -> list[np.ndarray]:
+    """A collision-free configuration-space path from OMPL RRTConnect, simplified.
+
+    ``resolution``: largest step (configuration-space units) at which OMPL checks
+    straight motions between states.  ``valid``: the validity of a batch of
+    configurations (default ``checker.valid``; ``checker`` also gives the box).
+    ``held``: indices of coordinates kept at ``x0``'s values all along (OMPL
+    samples only the others; ``xg`` must agree with ``x0`` there).
+
+    Raises
+    ------
+    PlanningError
+        No exact solution within ``seconds``.
+    """
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    if seed is not None:
+        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
+    full_n = len(x0)
+    held_set = set(int(j) for j in held)
+    if any(x0[j] != xg[j] for j in held_set):
+        raise ValueError("held coordinates must agree at the start and the goal")
+    free = np.array([j for j in range(full_n) if j not in held_set], dtype=int)
+    lo, hi = _box(checker, x0, xg)
+    lo, hi = lo[free], hi[free]
+    n = len(free)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for j in range(n):
+        bounds.setLow(j, float(lo[j]))
+        bounds.setHigh(j, float(hi[j]))
+    space.setBounds(bounds)
+    setup = og.SimpleSetup(space)
+
+    is_valid = checker.valid if valid is None else valid
+
+    def embed(values: Sequence[float]) -> np.ndarray:
+        q = x0.astype(float).copy()
+        q[free] = values
+        return q
+
+    def state_valid(state: Any) -> bool:
+        q = embed([state[j] for j in range(n)])
+        return bool(is_valid(q[None, :])[0])
+
+    setup.setStateValidityChecker(state_valid)
+    extent = float(np.linalg.norm(hi - lo))
+    setup.getSpaceInformation().setStateValidityCheckingResolution(
+        min(0.05, resolution / max(extent, 1e-12))
+    )
+    start, goal = space.allocState(), space.allocState()
+    # OMPL's stubs type allocState() as the abstract State; a real-vector state is indexable
+    for j in range(n):
+        start[j], goal[j] = float(x0[free[j]]), float(xg[free[j]])  # pyright: ignore[reportIndexIssue]
+    setup.setStartAndGoalStates(start, goal)
+    setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
+    status = setup.solve(float(seconds))
+    if not (status and setup.haveExactSolutionPath()):
+        raise PlanningError(
+            f"no collision-free path from OMPL RRTConnect within {seconds:.3g} s "
+            f"(status: {status.asString() if hasattr(status, 'asString') else status}); "
+            "raise --time-limit, or check that start and goal are connected in the free space"
+        )
+    # shortcutting until it converges can take seconds of validity checks: bounded
+    setup.simplifySolution(float(min(SIMPLIFY_SECONDS, seconds)))
+    path = setup.getSolutionPath()
+    states = [path.getState(i) for i in range(path.getStateCount())]
+    pts = [embed([s[j] for j in range(n)]) for s in states]  # pyright: ignore[reportIndexIssue]
+    pts[0], pts[-1] = x0.copy(), xg.copy()
+    return pts
