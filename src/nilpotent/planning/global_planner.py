@@ -596,6 +596,8 @@ def plan_global(
     iterations: list[Iteration] = []
     pieces: list[Piece] = []
     last: Plan | None = None
+    from nilpotent.progress import report as report_progress  # pieces steered, on stderr
+
     while targets:
         if time.perf_counter() > deadline:
             raise PlanningError(
@@ -641,5 +643,6 @@ def plan_global(
         prev = w
         used.append(w)
         last = p
+        report_progress(len(pieces), len(pieces) + len(targets), "pieces steered")
     assert last is not None
     return finish(segments, iterations, used, pieces, "global", planner_s, last)

@@ -346,7 +346,7 @@ def _run(out: Path, settings: Settings, quick: bool, callback: Progress | None) 
         with steps.step(_STEPS[6]):
             stems = _write_figures(data, files)
         with steps.step(_STEPS[7]):
-            anim_files = _write_animations(data, files)
+            anim_files = _write_animations(data, files, bar)
         with steps.step(_STEPS[8]):
             index = _write_page(data, PageFigures(**stems, animations=anim_files), out)
     if callback is not None:
@@ -551,7 +551,8 @@ def _write_figures(data: ReproductionData, files: _Files) -> dict[str, Any]:
     }
 
 
-def _write_animations(data: ReproductionData, files: _Files) -> dict[tuple[int, int], Any]:
+def _write_animations(data: ReproductionData, files: _Files, bar: Any = None
+                      ) -> dict[tuple[int, int], Any]:
     """Animations of the robot (Section 4 fields) and of its approximation, per bracket."""
     from nilpotent.models.trident import TridentGeometry
     from nilpotent.viz import animate_motion_comparison, save_animation
@@ -560,6 +561,9 @@ def _write_animations(data: ReproductionData, files: _Files) -> dict[tuple[int, 
     out: dict[tuple[int, int], Any] = {}
     for pair in BRACKET_PAIRS:
         m, k = data.motions["body", pair], data.s4_names[pair]
+        stage = f"animation g{k}: [g{pair[0]},g{pair[1]}], {data.settings.frames} frames"
+        if bar is not None:
+            bar.update(detail=stage)
         anim = animate_motion_comparison(
             m.original,
             m.approximate,
