@@ -155,6 +155,14 @@ class GlobalPlan:
     def error(self) -> float:
         return self.verification.error
 
+    def plot(self, snapshots: int = 12) -> Any:
+        """The plan's figure (:func:`nilpotent.viz.plan_world.plot_plan_world`, the one of
+        ``nilpotent plan --plot``): the motion in the world with the robot's outline,
+        the coordinates against their limits, the inputs; a matplotlib ``Figure``."""
+        from nilpotent.viz.plan_world import plot_plan_world
+
+        return plot_plan_world(self, snapshots)
+
     def to_json(self) -> dict[str, Any]:
         """``nilpotent/plan@1`` (INTERFACE.md) with ``world``, ``limits``, ``waypoints``,
         ``clearance``, ``limits_ok``, ``min_singular_margin`` and more; no NaN/Infinity

@@ -153,10 +153,11 @@ class Plan:
         return float(sum(s.duration for s in self.segments))
 
     def plot(self) -> Any:
-        """The plan's figure (:func:`nilpotent.viz.plan.plot_plan`): path, errors, inputs."""
-        from nilpotent.viz.plan import plot_plan
+        """The plan's figure (:func:`nilpotent.viz.plan_world.plot_plan_world`, as
+        ``nilpotent plan --plot``): the motion, the coordinates, the inputs."""
+        from nilpotent.viz.plan_world import plot_plan_world
 
-        return plot_plan(self)
+        return plot_plan_world(self)
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/plan@1`` object of INTERFACE.md (plus extra fields), strict JSON.

@@ -297,7 +297,7 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
         + " moves the robot by "
         + formula(r"\pi A^2 [g_i, g_j](0) + O(A^3)")
         + ". Trajectories of the body centre, "
-        "the three vertices and the three wheels; robot at the start (dashed) and "
+        "the three vertices and the three wheels; robot at the start (dotted, faded) and "
         "at the end.</p>"
     ]
     rows = []
@@ -327,8 +327,8 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
 
     compare_html = [
         "<p>As in the paper's Figs 5–7: the same inputs applied to eq. vf "
-        "(dotted) and to its nilpotent approximation in the model coordinates "
-        "(solid); the wheels' trajectories show the accuracy in the plane. Below, "
+        "(solid) and to its nilpotent approximation in the model coordinates "
+        "(dashed, drawn above); the wheels' trajectories show the accuracy in the plane. Below, "
         "the same for the Section 4 robot, with animations.</p>"
     ]
     for n, pair in enumerate(pairs):
@@ -346,7 +346,7 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
             _fig(
                 fig_compare["body", pair],
                 f"[g{pair[0]},g{pair[1]}] (g{k}): Section 4 robot, original "
-                "(dotted) vs approximation (solid)",
+                "(solid) vs approximation (dashed)",
             )
         )
         files = anim_files[pair]

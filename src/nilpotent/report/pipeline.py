@@ -526,8 +526,8 @@ def _write_figures(data: ReproductionData, files: _Files) -> dict[str, Any]:
                 m.approximate,
                 geometry[key],
                 times=m.times,
-                title=f"[g{pair[0]},g{pair[1]}] (g{k}): {label}, original (dotted) vs "
-                f"nilpotent approximation (solid), A = {m.amplitude:g}",
+                title=f"[g{pair[0]},g{pair[1]}] (g{k}): {label}, original (solid) vs "
+                f"nilpotent approximation (dashed), A = {m.amplitude:g}",
             )
             stem = (
                 f"fig{n + 5}_g{k}_comparison"
