@@ -710,7 +710,7 @@ def as_signal(
     if times[0] != 0.0 or np.any(np.diff(times) <= 0):
         raise OptionError("sample times T must start at 0 and increase strictly")
     if hold == "zero":
-        return piecewise_constant(values[:-1], np.diff(times))
+        return piecewise_constant(values[:-1], [float(d) for d in np.diff(times)])
     t_frozen, u_frozen = _frozen(times), _frozen(values)
 
     def interpolated(t: float) -> np.ndarray:

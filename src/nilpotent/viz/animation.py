@@ -277,7 +277,8 @@ def save_animation(
         raise OptionError(f"cannot save the animation: {out} is not a folder")
     gif = out / f"{stem}.gif"
     with_mp4 = mp4 and FFMpegWriter.isAvailable()
-    passes = ("GIF", "MP4", "HTML player") if with_mp4 else ("GIF", "HTML player")
+    passes: tuple[str, ...] = ("GIF", "MP4", "HTML player") if with_mp4 else ("GIF",
+                                                                              "HTML player")
     n = anim.frames
     with progress(f"animation {stem}: frames", total=n * len(passes)) as bar:
 
@@ -293,7 +294,7 @@ def save_animation(
             video = out / f"{stem}.mp4"
             anim.animation.save(video, writer=FFMpegWriter(fps=fps), dpi=dpi,  # pyright: ignore[reportArgumentType]
                                 progress_callback=lambda k, t: frame_done(k, t, n))
-            bar.update(2 * n, detail=passes[2])
+            bar.update(2 * n, detail=passes[-1])
         frames = []
         for k in range(n):
             frames.append(_frame_png(anim, k, dpi))
