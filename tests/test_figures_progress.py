@@ -280,14 +280,14 @@ def test_sampled_and_callable_inputs():
     (np.array([0.0, 1.0]), np.full((2, 2), np.nan)),
 ])
 def test_bad_inputs_are_refused(bad):
-    from nilpotent.numeric.signals import as_signal
+    from nilpotent.numeric.sampled import as_signal
 
     with pytest.raises(OptionError):
         as_signal(bad, 2)
 
 
 def test_a_callable_needs_a_duration():
-    from nilpotent.numeric.signals import as_signal
+    from nilpotent.numeric.sampled import as_signal
 
     with pytest.raises(OptionError, match="duration"):
         as_signal(lambda t: [0.0, 0.0], 2)

@@ -139,7 +139,7 @@ API_SUPPORTING: dict[str, tuple[str, ...]] = {
         "nilpotent.numeric.integrate.BatchSolution",
         "nilpotent.numeric.integrate.Status",
         "nilpotent.numeric.signals.FunctionSignal",
-        "nilpotent.numeric.signals.as_signal",
+        "nilpotent.numeric.sampled.as_signal",
         "nilpotent.numeric.engines.ENGINES",
         "nilpotent.viz.simulation.plot_comparison",
         "nilpotent.viz.simulation.plot_scaling_study",

@@ -43,7 +43,8 @@ from nilpotent.numeric.engines.base import Status as Status
 from nilpotent.numeric.engines.base import check_times
 from nilpotent.numeric.engines.numba_engine import kernels_cached as kernels_cached
 from nilpotent.numeric.engines.scipy_engine import solve_function_input as solve_function_input
-from nilpotent.numeric.signals import FunctionSignal, Signal, as_signal
+from nilpotent.numeric.sampled import as_signal
+from nilpotent.numeric.signals import FunctionSignal, Signal
 from nilpotent.numeric.tableaux import DOP853
 from nilpotent.numeric.types import PerTrajectory, Samples, States, Times
 
@@ -189,7 +190,7 @@ def integrate(
         shared by all states given as a callable ``u(t) -> (m,)`` (with
         ``duration``), a :class:`~nilpotent.numeric.signals.FunctionSignal`, or
         samples ``(T, U)``: ``T`` of shape ``(K,)`` from 0, ``U`` of shape
-        ``(K, m)`` (:func:`~nilpotent.numeric.signals.as_signal`, the one
+        ``(K, m)`` (:func:`~nilpotent.numeric.sampled.as_signal`, the one
         conversion).  A function input (a callable, or samples with
         ``hold="linear"``) is integrated by the scipy engine (``solve_ivp``,
         adaptive), one trajectory after the other.

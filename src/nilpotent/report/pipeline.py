@@ -427,13 +427,17 @@ def _amplitude_study(
     """Error of the approximation against amplitude, for every model and bracket."""
     from nilpotent.simulation import scaling_study
 
-    return {
-        (key, pair): scaling_study(
-            systems[key], pair, settings.amplitudes, approximation=approximations[key]
-        )
-        for key in ("vf", "body")
-        for pair in BRACKET_PAIRS
-    }
+    jobs = [(key, pair) for key in ("vf", "body") for pair in BRACKET_PAIRS]
+    out: dict[tuple[str, tuple[int, int]], Any] = {}
+    with report_progress("amplitude study: brackets", total=len(jobs)) as bar:
+        for key, pair in jobs:
+            bar.update(detail=f"{key} [g{pair[0]},g{pair[1]}], "
+                              f"{len(settings.amplitudes)} amplitudes")
+            out[key, pair] = scaling_study(
+                systems[key], pair, settings.amplitudes, approximation=approximations[key]
+            )
+            bar.advance()
+    return out
 
 
 # --- writing steps: files from ReproductionData ----------------------------------------

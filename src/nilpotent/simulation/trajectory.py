@@ -16,7 +16,8 @@ from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.compile import CompiledSystem, compile_system
 from nilpotent.numeric.integrate import Status, integrate
-from nilpotent.numeric.signals import FunctionSignal, Signal, as_signal
+from nilpotent.numeric.sampled import as_signal
+from nilpotent.numeric.signals import FunctionSignal, Signal
 from nilpotent.numeric.types import State, States, Times
 
 __all__ = ["Trajectory", "as_compiled", "float_point", "simulate"]
@@ -138,7 +139,7 @@ def simulate(
         batch 1), a :class:`~nilpotent.numeric.signals.FunctionSignal`, a
         callable ``u(t) -> (m,)`` (with ``duration``) or sampled inputs ``(T, U)``,
         ``T`` of shape ``(K,)`` from 0, ``U`` of shape ``(K, m)``
-        (:func:`~nilpotent.numeric.signals.as_signal`, the one conversion).  A
+        (:func:`~nilpotent.numeric.sampled.as_signal`, the one conversion).  A
         function input (a callable, or samples with ``hold="linear"``) is
         integrated with ``solve_ivp``: ``method``/``engine`` must then be left at
         their defaults or be ``"adaptive"``/``"scipy"``.
