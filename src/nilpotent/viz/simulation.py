@@ -100,7 +100,7 @@ def plot_comparison(comp: Any, fig: Any = None) -> tuple[Any, Any]:
     ax1.set_xlabel("time t (model time units)")
     ax1.set_ylabel(STATE_LABEL)
     ax1.set_title(f"{comp.system.name}: bracket motion [X{comp.bracket[0]},X{comp.bracket[1]}]")
-    style_legend(ax1)
+    style_legend(ax1, fontsize="x-small", ncol=2 if comp.system.n > 3 else 1)
     diff = np.abs(comp.original_y - comp.approximate_y)
     floor = error_floor(comp.tolerance)
     for w, idx in weight_groups(comp.weights):
