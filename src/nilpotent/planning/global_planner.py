@@ -1,18 +1,17 @@
 """Global planning among obstacles and limits: OMPL path, nilpotent steering, subdivision.
 
-The classical approximation of a holonomic path (Laumond, Sekhavat, Lamiraux,
-"Guidelines in nonholonomic motion planning for mobile robots", 1998; Laumond
-et al. 1994):
+The classical approximation of a holonomic path (Laumond, Sekhavat, Lamiraux, "Guidelines
+in nonholonomic motion planning for mobile robots", 1998; Laumond et al. 1994):
 
 1. a collision-free path in configuration space, ignoring the nonholonomic
    constraints, from OMPL's RRTConnect (``ompl.geometric``) with a validity
    checker for the limits, the world (robot outline vs obstacles, shapely)
    and the singular margin (:class:`~nilpotent.planning.verify.Checker`),
    simplified, then cut into pieces no longer than ``max_piece``;
-2. each piece is steered from the state actually reached to its end
-   waypoint by the iterated nilpotent steering
-   (:func:`nilpotent.planning.iterative.plan`); the steered motion is
-   re-simulated and checked at dense samples;
+2. each piece is steered from the state actually reached to its end waypoint by the
+   iterated nilpotent steering (:func:`nilpotent.planning.iterative.plan`); the steered
+   motion is re-simulated and checked at dense samples; progress on stderr counts the
+   pieces steered (:func:`nilpotent.progress.report`);
 3. a piece whose steered motion leaves the free space or the limits (or that
    cannot be steered) is halved (its chord's midpoint becomes a waypoint) and
    retried; intermediate waypoints are reached within
@@ -28,9 +27,8 @@ Before that, a **direct** attempt: when the goal is within ``DIRECT_RADIUS``
 and the straight chord from start to goal is admissible, the single nilpotent
 plan of ``plan()`` (the old behaviour of ``nilpotent plan``) is kept if its
 motion is admissible; this keeps earlier results unchanged for small problems.
-Every returned plan is re-simulated as a whole
-(:func:`~nilpotent.planning.verify.verify_segments`, 100 samples per segment)
-and refused unless admissible and within ``tol`` of the goal.
+Every returned plan is re-simulated as a whole (:func:`~nilpotent.planning.verify.verify_segments`,
+100 samples per segment) and refused unless admissible and within ``tol`` of the goal.
 """
 
 from __future__ import annotations
@@ -55,10 +53,11 @@ from nilpotent.errors import (
 )
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
-from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
+from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.simulation import simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
+from nilpotent.progress import report as report_progress
 from nilpotent.strict_json import json_safe
 
 __all__ = [
@@ -106,7 +105,7 @@ class Piece:
 
 
 @dataclass(frozen=True, eq=False)
-class GlobalPlan:
+class GlobalPlan(PlanFigure):
     """A plan among limits and obstacles, verified by dense re-simulation.
 
     Attributes
@@ -154,14 +153,6 @@ class GlobalPlan:
     @property
     def error(self) -> float:
         return self.verification.error
-
-    def plot(self, snapshots: int = 12) -> Any:
-        """The plan's figure (:func:`nilpotent.viz.plan_world.plot_plan_world`, the one of
-        ``nilpotent plan --plot``): the motion in the world with the robot's outline,
-        the coordinates against their limits, the inputs; a matplotlib ``Figure``."""
-        from nilpotent.viz.plan_world import plot_plan_world
-
-        return plot_plan_world(self, snapshots)
 
     def to_json(self) -> dict[str, Any]:
         """``nilpotent/plan@1`` (INTERFACE.md) with ``world``, ``limits``, ``waypoints``,
@@ -604,8 +595,6 @@ def plan_global(
     iterations: list[Iteration] = []
     pieces: list[Piece] = []
     last: Plan | None = None
-    from nilpotent.progress import report as report_progress  # pieces steered, on stderr
-
     while targets:
         if time.perf_counter() > deadline:
             raise PlanningError(
