@@ -149,6 +149,7 @@ API_SUPPORTING: dict[str, tuple[str, ...]] = {
         "nilpotent.planning.nilpotent.METHODS",
         "nilpotent.planning.world.builtin_worlds",
         "nilpotent.viz.plan.plot_plan",
+        "nilpotent.planning.iterative.PlanFigure",
         "nilpotent.viz.plan_world.plot_plan_world",
         "nilpotent.viz.plan_world.animate_plan_world",
     ),
