@@ -14,6 +14,16 @@ $(STAMP): pyproject.toml
 	rm -f $(VENV)/.installed-*
 	touch $(STAMP)
 
+# `make docs` needs only the package and the site's tools (the `docs` extra), not the
+# test toolchain
+DOCS_STAMP = $(VENV)/.docs-$(shell sha1sum pyproject.toml | cut -c1-12)
+
+$(DOCS_STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet -e ".[docs]"
+	rm -f $(VENV)/.docs-*
+	touch $(DOCS_STAMP)
+
 venv: $(STAMP)
 
 demo: $(STAMP)
@@ -31,7 +41,7 @@ test: $(STAMP)
 	$(VENV)/bin/mkdocs build --strict --site-dir build/site
 	$(VENV)/bin/pyright --pythonpath $(PY) src
 
-docs: $(STAMP)
+docs: $(DOCS_STAMP)
 	$(VENV)/bin/mkdocs build --strict --site-dir build/site
 	@echo "open build/site/index.html"
 

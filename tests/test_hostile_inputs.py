@@ -229,7 +229,7 @@ def test_quiet_silences_progress(run_cli, monkeypatch):
 @pytest.mark.parametrize(
     "args",
     [
-        ("simulate", "unicycle", "--bracket", "1,2"),
+        ("simulate", "unicycle"),  # --bracket missing (--amplitude has a default, 0.1)
         ("simulate", "unicycle", "--bracket", "1,2", "--amplitude", "abc"),
         ("analyze", "unicycle", "--bogus"),
         ("analyze",),

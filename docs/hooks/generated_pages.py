@@ -139,6 +139,7 @@ API_SUPPORTING: dict[str, tuple[str, ...]] = {
         "nilpotent.numeric.integrate.BatchSolution",
         "nilpotent.numeric.integrate.Status",
         "nilpotent.numeric.signals.FunctionSignal",
+        "nilpotent.numeric.sampled.as_signal",
         "nilpotent.numeric.engines.ENGINES",
         "nilpotent.viz.simulation.plot_comparison",
         "nilpotent.viz.simulation.plot_scaling_study",
@@ -148,6 +149,9 @@ API_SUPPORTING: dict[str, tuple[str, ...]] = {
         "nilpotent.planning.nilpotent.METHODS",
         "nilpotent.planning.world.builtin_worlds",
         "nilpotent.viz.plan.plot_plan",
+        "nilpotent.planning.iterative.PlanFigure",
+        "nilpotent.viz.plan_world.plot_plan_world",
+        "nilpotent.viz.plan_world.animate_plan_world",
     ),
 }
 

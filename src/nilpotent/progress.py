@@ -8,6 +8,11 @@ approximations, simulations, sweeps, the paper reproduction):
   at most one per :data:`PLAIN_INTERVAL` seconds, the first after :data:`PLAIN_INTERVAL`
   seconds (a quick task prints nothing), a line every :data:`HEARTBEAT` seconds of
   silence (``... (still running, 12 s)``) and a last one when a reported task ends;
+- where the total is known, the rate (units per second) and the estimated time left
+  (on a terminal rich's :class:`~rich.progress.TimeRemainingColumn`; off a terminal
+  ``(12.3/s, about 40 s left)`` on each line);
+- a task started while another runs (compiling the integrator during a sweep) is a
+  second line of the same bar;
 - nothing at all until :func:`configure` enables it (the CLI does; a notebook or a
   script may), so that library calls stay silent by default.
 
@@ -44,6 +49,13 @@ HEARTBEAT = 5.0
 
 _state = {"enabled": False}
 _lock = threading.Lock()
+_live: list[object] = []
+"""The rich progress display now shown (at most one; nested tasks join it)."""
+_tasks: list[Progress] = []  # the tasks now reported, innermost last (see current())
+"""The rich progress display now shown (at most one; nested tasks join it)."""
+
+COMPILING = "compiling the integrator (first run of this model)"
+"""The stage shown while an integrator is compiled (heyoka's LLVM, numba's kernels)."""
 
 
 def configure(*, enabled: bool) -> None:
@@ -101,7 +113,8 @@ class Progress:
             self.detail = _plain_text(detail, 80)
         if self._bar is not None:
             self._bar.update(  # type: ignore[attr-defined]
-                self._task, completed=self.completed, description=self._label()
+                self._task, completed=self.completed, description=self._label(),
+                total=self.total,
             )
         elif self._stream is not None:
             now = time.monotonic()
@@ -113,9 +126,28 @@ class Progress:
         text = self.description + (f" ({self.detail})" if self.detail else "")
         return text
 
+    def rate(self) -> float | None:
+        """Units done per second since the task started (``None`` before the first)."""
+        elapsed = time.monotonic() - self._start
+        if self.completed <= 0 or elapsed <= 0 or not self._start:
+            return None
+        return self.completed / elapsed
+
+    def remaining(self) -> float | None:
+        """Estimated seconds left, from the rate so far (``None`` without a total)."""
+        speed = self.rate()
+        if not self.total or speed is None:
+            return None
+        return max(self.total - self.completed, 0) / speed
+
     def _emit(self, suffix: str = "") -> None:
         count = f"{self.completed}/{self.total}" if self.total else (
             f"{self.completed}" if self.completed else "")
+        if count and not suffix:
+            speed, left = self.rate(), self.remaining()
+            if speed is not None:
+                count += f" ({_format_rate(speed)}"
+                count += f", about {_format_seconds(left)} left)" if left is not None else ")"
         line = f"nilpotent: {self._label()}{': ' if count else ''}{count}{suffix}\n"
         with _lock:
             self._emitted = True
@@ -126,6 +158,72 @@ class Progress:
                 self._stream.flush()
             except (OSError, ValueError):
                 self._stream = None  # stderr closed: stop reporting, never fail the work
+
+
+def _format_rate(speed: float) -> str:
+    return f"{speed:,.0f}/s" if speed >= 10 else f"{speed:.2g}/s"
+
+
+def _format_seconds(seconds: float) -> str:
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def rich_columns(total: int | None) -> list[object]:
+    """The columns of the terminal bar: what, bar, the count, the rate and the estimated
+    time left (rich's :class:`~rich.progress.TimeRemainingColumn`), then the time elapsed.
+
+    The count, rate and time left show only while the task's total is known (it may
+    become known later: :func:`report`); ``total`` is the total at the start.
+    """
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        ProgressColumn,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+    from rich.text import Text
+
+    class RateColumn(ProgressColumn):
+        """Units per second (rich's TransferSpeedColumn counts bytes)."""
+
+        def render(self, task):  # type: ignore[override]
+            speed = task.finished_speed or task.speed
+            return Text("" if speed is None or task.total is None else _format_rate(speed))
+
+    class CountColumn(MofNCompleteColumn):
+        def render(self, task):  # type: ignore[override]
+            return Text("") if task.total is None else super().render(task)
+
+    class RemainingColumn(TimeRemainingColumn):
+        def render(self, task):  # type: ignore[override]
+            return Text("") if task.total is None else super().render(task)
+
+    del total  # every task gets the same columns (a nested task may know its total)
+    return [TextColumn("{task.description}"), BarColumn(), CountColumn(), RateColumn(),
+            RemainingColumn(), TimeElapsedColumn()]
+
+
+def current() -> Progress | None:
+    """The innermost task now reported (``None`` when none is, or reports are off)."""
+    return _tasks[-1] if _tasks else None
+
+
+def report(done: int, total: int | None = None, detail: str | None = None) -> None:
+    """Say how far the innermost running task is (``done`` of ``total`` units): for code
+    deep in a long step (pieces of a plan steered) that does not own the task; nothing
+    when no task is reported."""
+    task = current()
+    if task is None:
+        return
+    if total is not None:
+        task.total = int(total)
+    task.update(done, detail)
 
 
 @contextmanager
@@ -155,26 +253,48 @@ def progress(
         yield task
         return
     out = stream if stream is not None else sys.stderr
+    _tasks.append(task)
+    try:
+        with _shown(task, out) as shown:
+            yield shown
+    finally:
+        _tasks.remove(task)
+
+
+@contextmanager
+def _shown(task: Progress, out: TextIO) -> Iterator[Progress]:
+    """Show ``task`` on ``out``: a rich bar on a terminal, plain lines otherwise."""
+    description, total = task.description, task.total
     is_tty = False
     try:
         is_tty = out.isatty()
     except (AttributeError, ValueError, OSError):
         is_tty = False
+    task._start = time.monotonic()
     if is_tty:
         from rich.console import Console
         from rich.markup import escape
-        from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
         from rich.progress import Progress as RichProgress
 
-        columns = [TextColumn("{task.description}"), BarColumn()]
-        if total:
-            columns.append(MofNCompleteColumn())
-        columns.append(TimeElapsedColumn())
-        with RichProgress(*columns, console=Console(file=out), transient=True) as bar:
+        task._label = lambda: escape(Progress._label(task))  # type: ignore[method-assign]
+        if _live:  # a task within a task: one more line of the bar shown
+            bar = _live[-1]
+            task._bar = bar
+            task._task = bar.add_task(escape(description), total=total)  # type: ignore
+            try:
+                yield task
+            finally:
+                bar.remove_task(task._task)  # type: ignore[attr-defined]
+            return
+        with RichProgress(*rich_columns(total), console=Console(file=out),  # type: ignore
+                          transient=True) as bar:
             task._bar = bar
             task._task = bar.add_task(escape(description), total=total)
-            task._label = lambda: escape(Progress._label(task))  # type: ignore[method-assign]
-            yield task
+            _live.append(bar)
+            try:
+                yield task
+            finally:
+                _live.remove(bar)
         return
     task._stream = out
     task._last = time.monotonic()  # the first line comes after PLAIN_INTERVAL: a quick

@@ -50,6 +50,30 @@ app = typer.Typer(
 
 F = TypeVar("F", bound=Callable[..., Any])
 
+
+def _print_version(value: bool) -> None:
+    if value:
+        from nilpotent.version import __version__
+
+        typer.echo(f"nilpotent {__version__}")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _global_options(
+    version: Annotated[bool, typer.Option(
+        "--version", callback=_print_version, is_eager=True,
+        help="Print the package version and exit.")] = False,
+    quiet: Annotated[bool, typer.Option(
+        "--quiet", help="No progress on stderr (accepted anywhere on the command line).")
+    ] = False,
+    debug: Annotated[bool, typer.Option(
+        "--debug", help="Print the traceback of an internal error (accepted anywhere on the "
+        "command line).")] = False,
+) -> None:
+    """The options every command accepts (``--quiet`` and ``--debug`` are read by
+    :func:`nilpotent.cli.main` wherever they stand, so they never reach here)."""
+
 # --- shared option types ---------------------------------------------------
 ModelArg = Annotated[
     str,
@@ -142,6 +166,11 @@ MAX_SCALING_AMPLITUDES = 1000
 MAX_VARY_COMBINATIONS = 100
 """Most parameter combinations of a sweep (``--vary`` values multiplied): each needs its
 own nilpotent approximation."""
+MAX_TIME_SAMPLES = 1000
+"""Most times at which a sweep's errors along the way are taken (``--time-samples``)."""
+MAX_CHUNK_STATES = 40_000_000
+"""Most sampled states of one sweep chunk (``--chunk-size`` x ``--time-samples``): each
+holds a state of both trajectories in memory while the chunk runs."""
 MAX_CHUNK_SIZE = 1_000_000
 """Largest chunk of a sweep (``--chunk-size``)."""
 MAX_SEED = 2**63 - 1

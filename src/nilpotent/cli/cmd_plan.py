@@ -208,11 +208,9 @@ def plan_command(
 def write_pictures(result, plot: Path | None, animate: Path | None) -> None:
     """``--plot`` and ``--animate`` of a global plan (world, outline, joint limits)."""
     if plot is not None:
-        from nilpotent.viz.plan_world import plot_plan_world
-
         # user texts shown literally: the model's name and the world's (titles)
         names = (result.plan.system.name,) + ((result.world.name,) if result.world else ())
-        save_figure(plot_plan_world(result), plot, names)
+        save_figure(result.plot(), plot, names)  # the figure of GlobalPlan.plot()
     if animate is not None:
         import matplotlib
 

@@ -59,7 +59,7 @@ def print_comparison(comp) -> None:
 def simulate_command(
     model: ModelArg,
     bracket: BracketOpt,
-    amplitude: AmplitudeOpt,
+    amplitude: AmplitudeOpt = 0.1,
     omega: OmegaOpt = 1.0,
     periods: PeriodsOpt = 1,
     at: AtOpt = None,

@@ -15,10 +15,12 @@ import typer
 from nilpotent.cli.app import (
     MAX_AMPLITUDE_COUNT,
     MAX_CHUNK_SIZE,
+    MAX_CHUNK_STATES,
     MAX_PERIODS,
     MAX_SAMPLES,
     MAX_SEED,
     MAX_SWEEP_MOTIONS,
+    MAX_TIME_SAMPLES,
     MAX_VARY_COMBINATIONS,
     AtOpt,
     JsonOpt,
@@ -214,6 +216,14 @@ def sweep_command(
                      help=f"Whole periods of the loop (1 to {MAX_PERIODS}).",
                      parser=bounded_int("--periods", 1, MAX_PERIODS)),
     ] = 1,
+    time_samples: Annotated[
+        int,
+        typer.Option("--time-samples", metavar="N",
+                     parser=bounded_int("--time-samples", 2, MAX_TIME_SAMPLES),
+                     help="Equally spaced times (ends included) at which the errors along "
+                          f"the way are taken (2 to {MAX_TIME_SAMPLES}; 2: start and end "
+                          "only, the fastest)."),
+    ] = 33,
     rtol: Annotated[float, typer.Option(
         "--rtol", help="Relative tolerance (> 0, at most 1).",
         parser=bounded_float("--rtol", 0.0, 1.0, open_low=True))] = 1e-10,
@@ -270,6 +280,10 @@ def sweep_command(
 
         check_dask(dask, chunk_size, connect_timeout=dask_connect_timeout,
                    progress_timeout=dask_progress_timeout)  # before any work
+    if chunk_size * time_samples > MAX_CHUNK_STATES:
+        raise ComputationLimitError(
+            f"--chunk-size {chunk_size:,} x --time-samples {time_samples:,} sampled states per "
+            f"chunk is above the limit {MAX_CHUNK_STATES:,} (memory); lower --chunk-size")
     varied = parse_vary(vary)
     combinations = math.prod(len(v) for v in varied.values())
     if combinations > MAX_VARY_COMBINATIONS:
@@ -301,7 +315,8 @@ def sweep_command(
 
         result = sweep(
             system, pairs, amps, point=point, samples=samples, radius=radius, seed=seed,
-            design=design, vary=varied or None, periods=periods, rtol=rtol, atol=rtol * 1e-2,
+            design=design, vary=varied or None, periods=periods,
+            time_samples=time_samples, rtol=rtol, atol=rtol * 1e-2,
             bound=bound, chunk_size=chunk_size, dask=dask, progress=progress,
             dask_connect_timeout=dask_connect_timeout,
             dask_progress_timeout=dask_progress_timeout,

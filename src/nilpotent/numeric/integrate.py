@@ -29,7 +29,7 @@ never raised (:meth:`BatchSolution.raise_for_status` raises when wanted).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,7 +43,8 @@ from nilpotent.numeric.engines.base import Status as Status
 from nilpotent.numeric.engines.base import check_times
 from nilpotent.numeric.engines.numba_engine import kernels_cached as kernels_cached
 from nilpotent.numeric.engines.scipy_engine import solve_function_input as solve_function_input
-from nilpotent.numeric.signals import Signal
+from nilpotent.numeric.sampled import as_signal
+from nilpotent.numeric.signals import FunctionSignal, Signal
 from nilpotent.numeric.tableaux import DOP853
 from nilpotent.numeric.types import PerTrajectory, Samples, States, Times
 
@@ -126,11 +127,44 @@ class BatchSolution:
 
 
 # --- entry point ---------------------------------------------------------------
+
+
+def _integrate_function(system: CompiledSystem, xs: np.ndarray, inputs: FunctionSignal,
+                        method: str, engine: str, times: Any, rtol: float, atol: float,
+                        max_steps: int, bound: float) -> BatchSolution:
+    """:func:`integrate` of a function input: ``solve_ivp`` per trajectory."""
+    if method != "adaptive" or engine not in ("auto", "scipy"):
+        raise OptionError("a function input is integrated by solve_ivp (method='adaptive', "
+                          "engine='scipy')")
+    if not (rtol > 0 and atol >= 0 and math.isfinite(rtol) and math.isfinite(atol)):
+        raise OptionError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
+    ts = check_times(times, np.array([inputs.duration]))
+    finals, samples, status, evaluations = [], [], [], []
+    for x in xs:
+        final, states, code, count = solve_function_input(
+            system, x, inputs.evaluate, inputs.breakpoints, times=ts, rtol=rtol, atol=atol,
+            max_steps=max_steps, bound=bound)
+        finals.append(final)
+        samples.append(states)
+        status.append(int(code))
+        evaluations.append(int(count))
+    b, n = xs.shape
+    return BatchSolution(
+        method="adaptive", engine="scipy", x0=_ro(xs),
+        final=_ro(np.array(finals).reshape(b, n)), times=_ro(ts),
+        samples=_ro(np.array(samples).reshape(b, ts.size, n)),
+        status=_ro(np.array(status, dtype=np.int64)),
+        steps=_ro(np.array(evaluations, dtype=np.int64)),
+        rejected=_ro(np.zeros(b, dtype=np.int64)), error_estimate=_ro(np.full(b, np.nan)),
+        tolerance=float(rtol), rtol=float(rtol), atol=float(atol), steps_per_segment=0,
+    )
 def integrate(
     system: CompiledSystem,
     x0: Any,
-    inputs: Signal,
+    inputs: Signal | FunctionSignal | Callable[[float], Any] | tuple[Any, Any],
     *,
+    duration: float | None = None,
+    hold: str = "linear",
     method: str = "adaptive",
     engine: str = "auto",
     times: Sequence[float] | np.ndarray | None = None,
@@ -152,7 +186,19 @@ def integrate(
     x0:
         ``(B, n)`` initial states (or ``(n,)`` for one).
     inputs:
-        A batch of ``B`` input signals, or of 1 shared by all states.
+        A batch of ``B`` input signals, or of 1 shared by all states; or inputs
+        shared by all states given as a callable ``u(t) -> (m,)`` (with
+        ``duration``), a :class:`~nilpotent.numeric.signals.FunctionSignal`, or
+        samples ``(T, U)``: ``T`` of shape ``(K,)`` from 0, ``U`` of shape
+        ``(K, m)`` (:func:`~nilpotent.numeric.sampled.as_signal`, the one
+        conversion).  A function input (a callable, or samples with
+        ``hold="linear"``) is integrated by the scipy engine (``solve_ivp``,
+        adaptive), one trajectory after the other.
+    duration:
+        End of a callable input's interval ``[0, duration]``.
+    hold:
+        How samples ``(T, U)`` are read between their times: ``"linear"``
+        interpolation (as python-control) or ``"zero"``-order hold.
     method:
         ``"adaptive"`` or ``"fixed"`` (:data:`METHODS`).
     engine:
@@ -196,8 +242,10 @@ def integrate(
     xs = np.ascontiguousarray(np.atleast_2d(np.asarray(x0, dtype=np.float64)))
     if xs.ndim != 2 or xs.shape[1] != system.n:
         raise OptionError(f"initial states must have shape (B, {system.n}), got {np.shape(x0)}")
-    if inputs.m != system.m:
-        raise OptionError(f"inputs have {inputs.m} components, the system has {system.m} fields")
+    inputs = as_signal(inputs, system.m, duration=duration, hold=hold)
+    if isinstance(inputs, FunctionSignal):
+        return _integrate_function(system, xs, inputs, method, engine, times, rtol, atol,
+                                   max_steps, bound)
     batch = xs.shape[0]
     sig = inputs.broadcast(batch)
     total = sig.total_durations

@@ -634,3 +634,4 @@ class FunctionSignal:
     def evaluate(self, t: float) -> np.ndarray:
         """``(m,)`` inputs at time ``t``."""
         return np.asarray(self.func(float(t)), dtype=float).reshape(self.m)
+

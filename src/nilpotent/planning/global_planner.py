@@ -1,18 +1,17 @@
 """Global planning among obstacles and limits: OMPL path, nilpotent steering, subdivision.
 
-The classical approximation of a holonomic path (Laumond, Sekhavat, Lamiraux,
-"Guidelines in nonholonomic motion planning for mobile robots", 1998; Laumond
-et al. 1994):
+The classical approximation of a holonomic path (Laumond, Sekhavat, Lamiraux, "Guidelines
+in nonholonomic motion planning for mobile robots", 1998; Laumond et al. 1994):
 
 1. a collision-free path in configuration space, ignoring the nonholonomic
    constraints, from OMPL's RRTConnect (``ompl.geometric``) with a validity
    checker for the limits, the world (robot outline vs obstacles, shapely)
    and the singular margin (:class:`~nilpotent.planning.verify.Checker`),
    simplified, then cut into pieces no longer than ``max_piece``;
-2. each piece is steered from the state actually reached to its end
-   waypoint by the iterated nilpotent steering
-   (:func:`nilpotent.planning.iterative.plan`); the steered motion is
-   re-simulated and checked at dense samples;
+2. each piece is steered from the state actually reached to its end waypoint by the
+   iterated nilpotent steering (:func:`nilpotent.planning.iterative.plan`); the steered
+   motion is re-simulated and checked at dense samples; progress on stderr counts the
+   pieces steered (:func:`nilpotent.progress.report`);
 3. a piece whose steered motion leaves the free space or the limits (or that
    cannot be steered) is halved (its chord's midpoint becomes a waypoint) and
    retried; intermediate waypoints are reached within
@@ -28,9 +27,8 @@ Before that, a **direct** attempt: when the goal is within ``DIRECT_RADIUS``
 and the straight chord from start to goal is admissible, the single nilpotent
 plan of ``plan()`` (the old behaviour of ``nilpotent plan``) is kept if its
 motion is admissible; this keeps earlier results unchanged for small problems.
-Every returned plan is re-simulated as a whole
-(:func:`~nilpotent.planning.verify.verify_segments`, 100 samples per segment)
-and refused unless admissible and within ``tol`` of the goal.
+Every returned plan is re-simulated as a whole (:func:`~nilpotent.planning.verify.verify_segments`,
+100 samples per segment) and refused unless admissible and within ``tol`` of the goal.
 """
 
 from __future__ import annotations
@@ -57,10 +55,11 @@ from nilpotent.numeric.types import State
 from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.holonomic_path import ompl_path
-from nilpotent.planning.iterative import Iteration, Plan, Trajectory, plan
+from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.simulation import simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
+from nilpotent.progress import report as report_progress
 from nilpotent.strict_json import json_safe
 
 __all__ = [
@@ -108,7 +107,7 @@ class Piece:
 
 
 @dataclass(frozen=True, eq=False)
-class GlobalPlan:
+class GlobalPlan(PlanFigure):
     """A plan among limits and obstacles, verified by dense re-simulation.
 
     Attributes
@@ -594,5 +593,6 @@ def _plan_global(
         prev = w
         used.append(w)
         last = p
+        report_progress(len(pieces), len(pieces) + len(targets), "pieces steered")
     assert last is not None
     return finish(segments, iterations, used, pieces, "global", planner_s, last)

@@ -98,8 +98,22 @@ class Iteration:
     kind: str = "nilpotent"
 
 
+class PlanFigure:
+    """The ``.plot()`` of plans (:class:`Plan` and
+    :class:`~nilpotent.planning.global_planner.GlobalPlan`): one figure for both."""
+
+    def plot(self, snapshots: int = 12) -> Any:
+        """The plan's figure (:func:`nilpotent.viz.plan_world.plot_plan_world`, the one
+        of ``nilpotent plan --plot``): the motion (in its world, with the robot's
+        outline at ``snapshots`` times), the coordinates against their limits, the
+        inputs; a matplotlib ``Figure``."""
+        from nilpotent.viz.plan_world import plot_plan_world
+
+        return plot_plan_world(self, snapshots)
+
+
 @dataclass(frozen=True, eq=False)
-class Plan:
+class Plan(PlanFigure):
     """Controls steering a system from ``start`` to ``goal``, with what they reach.
 
     Attributes
@@ -154,12 +168,6 @@ class Plan:
     def duration(self) -> float:
         """Total duration of the controls."""
         return float(sum(s.duration for s in self.segments))
-
-    def plot(self) -> Any:
-        """The plan's figure (:func:`nilpotent.viz.plan.plot_plan`): path, errors, inputs."""
-        from nilpotent.viz.plan import plot_plan
-
-        return plot_plan(self)
 
     def to_json(self) -> dict[str, Any]:
         """The ``nilpotent/plan@1`` object of INTERFACE.md (plus extra fields), strict JSON.

@@ -142,20 +142,83 @@ def _audit_note(audit: Audit, *ids: str) -> str:
 
 
 _PROSE = re.compile(r"[A-Za-z]{4,}")
+_INLINE = re.compile(r"\$([^$]+)\$")
+_REF = re.compile(r"\\ref\{([^}]*)\}")
+
+WRAP_WIDTH = 44
+"""Characters of LaTeX after which a formula of the audit table may break (between
+top-level terms), so that it wraps in its column instead of being cut."""
+
+
+def split_latex(latex: str, width: int = WRAP_WIDTH) -> list[str]:
+    """``latex`` cut before top-level ``+``, ``-`` or ``=`` signs into pieces of about
+    ``width`` characters (never inside braces, parentheses or brackets), so that each
+    piece typesets on its own and the formula wraps."""
+    pieces: list[str] = []
+    depth, start = 0, 0
+    for k, ch in enumerate(latex):
+        if ch in "{([":
+            depth += 1
+        elif ch in "})]":
+            depth = max(depth - 1, 0)
+        elif (ch in "+-=" and depth == 0 and k - start >= width
+              and latex[:k].rstrip()[-1:] not in ("", "{", "(", "^", "_", "=", "+", "-", "\\")):
+            pieces.append(latex[start:k])
+            start = k
+    pieces.append(latex[start:])
+    return [p for p in pieces if p.strip()]
+
+
+def wrapped_formula(latex: str) -> str:
+    """A typeset formula (:func:`~nilpotent.report.page.formula`) that wraps: a long one
+    is typeset as several MathML pieces (:func:`split_latex`) in one ``.formula``
+    element that keeps the whole LaTeX for copying."""
+    pieces = split_latex(latex)
+    if len(pieces) < 2:
+        return formula(latex)
+    from nilpotent.typeset import COPY_HANDLER, mathml
+
+    try:
+        body = "".join(mathml(p) for p in pieces)
+    except Exception:  # latex2mathml cannot read a piece: the whole, as formula() does
+        return formula(latex)
+    return (
+        f'<span class="formula wrapped" data-latex="{html.escape(latex, quote=True)}">'
+        f"{body}"
+        f'<button type="button" class="copy-latex" title="copy LaTeX" '
+        f'onclick="{html.escape(COPY_HANDLER, quote=True)}">TeX</button></span>'
+    )
+
+
+def _prose_html(text: str) -> str:
+    """A sentence of the paper with its ``$...$`` formulas typeset, ``\\ref{label}``
+    shown as the label and ``--`` as a dash: no raw LaTeX beside the MathML."""
+    text = _REF.sub(lambda m: m.group(1), text).replace("--", "–")
+    out, last = [], 0
+    for m in _INLINE.finditer(text):
+        out.append(html.escape(text[last:m.start()]))
+        try:
+            out.append(formula(m.group(1).strip()))
+        except Exception:  # pragma: no cover - formula() falls back to <code> itself
+            out.append(html.escape(m.group(0)))
+        last = m.end()
+    out.append(html.escape(text[last:]))
+    return "".join(out)
 
 
 def _paper_cell(text: str) -> str:
-    """The paper's side of an audit entry: typeset when it is a LaTeX formula, else text.
+    """The paper's side of an audit entry: typeset when it is a LaTeX formula, else text
+    with its inline ``$...$`` formulas typeset.
 
     A formula is text without ``$`` whose letters outside LaTeX commands form no
     word of four letters or more (``g_5 = \\sqrt 3\\partial x_5``, not a sentence).
     """
     if "$" not in text and not _PROSE.search(re.sub(r"\\[A-Za-z]+", " ", text)):
         try:
-            return formula(text)
+            return wrapped_formula(text)
         except Exception:  # latex2mathml cannot read it: show the source as printed
             pass
-    return html.escape(text)
+    return _prose_html(text)
 
 
 def _computed_cell(text: str, coordinates: Sequence[sp.Symbol]) -> str:
@@ -177,8 +240,8 @@ def _computed_cell(text: str, coordinates: Sequence[sp.Symbol]) -> str:
     if any(rest.has(d) or any(c.has(d) for c in components) for d in partials.values()):
         return html.escape(text)  # not linear in the coordinate fields: keep the text
     if all(c == 0 for c in components):
-        return formula(expr_latex(expr))
-    return formula(field_latex(components, list(partials)))
+        return wrapped_formula(expr_latex(expr))
+    return wrapped_formula(field_latex(components, list(partials)))
 
 
 def _audit_table(audit: Audit, coordinates: Sequence[sp.Symbol]) -> str:
@@ -297,7 +360,7 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
         + " moves the robot by "
         + formula(r"\pi A^2 [g_i, g_j](0) + O(A^3)")
         + ". Trajectories of the body centre, "
-        "the three vertices and the three wheels; robot at the start (dashed) and "
+        "the three vertices and the three wheels; robot at the start (dotted, faded) and "
         "at the end.</p>"
     ]
     rows = []
@@ -327,8 +390,8 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
 
     compare_html = [
         "<p>As in the paper's Figs 5–7: the same inputs applied to eq. vf "
-        "(dotted) and to its nilpotent approximation in the model coordinates "
-        "(solid); the wheels' trajectories show the accuracy in the plane. Below, "
+        "(solid) and to its nilpotent approximation in the model coordinates "
+        "(dashed, drawn above); the wheels' trajectories show the accuracy in the plane. Below, "
         "the same for the Section 4 robot, with animations.</p>"
     ]
     for n, pair in enumerate(pairs):
@@ -346,7 +409,7 @@ def build_page(data: ReproductionData, figures: PageFigures) -> str:
             _fig(
                 fig_compare["body", pair],
                 f"[g{pair[0]},g{pair[1]}] (g{k}): Section 4 robot, original "
-                "(dotted) vs approximation (solid)",
+                "(solid) vs approximation (dashed)",
             )
         )
         files = anim_files[pair]

@@ -51,6 +51,8 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; }
 td.mono { font-family: ui-monospace, "SFMono-Regular", Menlo, Consolas, monospace;
           font-size: .82em; overflow-wrap: anywhere; }
 table.audit td { overflow-wrap: anywhere; }
+table.audit .formula { overflow-x: visible; flex-wrap: wrap; row-gap: .15em; }
+table.audit math { font-size: 1em; }
 tr.agrees td.verdict { color: var(--ok); background: var(--okbg); font-weight: 600; }
 tr.differs td.verdict { color: var(--bad); background: var(--badbg); font-weight: 600; }
 figure { margin: 1.2em 0; }

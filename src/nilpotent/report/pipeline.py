@@ -350,7 +350,7 @@ def _run(out: Path, settings: Settings, quick: bool, callback: Progress | None) 
         with steps.step(_STEPS[6]):
             stems = _write_figures(data, files)
         with steps.step(_STEPS[7]):
-            anim_files = _write_animations(data, files)
+            anim_files = _write_animations(data, files, bar)
         with steps.step(_STEPS[8]):
             index = _write_page(data, PageFigures(**stems, animations=anim_files), out)
     if callback is not None:
@@ -431,13 +431,17 @@ def _amplitude_study(
     """Error of the approximation against amplitude, for every model and bracket."""
     from nilpotent.simulation import scaling_study
 
-    return {
-        (key, pair): scaling_study(
-            systems[key], pair, settings.amplitudes, approximation=approximations[key]
-        )
-        for key in ("vf", "body")
-        for pair in BRACKET_PAIRS
-    }
+    jobs = [(key, pair) for key in ("vf", "body") for pair in BRACKET_PAIRS]
+    out: dict[tuple[str, tuple[int, int]], Any] = {}
+    with report_progress("amplitude study: brackets", total=len(jobs)) as bar:
+        for key, pair in jobs:
+            bar.update(detail=f"{key} [g{pair[0]},g{pair[1]}], "
+                              f"{len(settings.amplitudes)} amplitudes")
+            out[key, pair] = scaling_study(
+                systems[key], pair, settings.amplitudes, approximation=approximations[key]
+            )
+            bar.advance()
+    return out
 
 
 # --- writing steps: files from ReproductionData ----------------------------------------
@@ -530,8 +534,8 @@ def _write_figures(data: ReproductionData, files: _Files) -> dict[str, Any]:
                 m.approximate,
                 geometry[key],
                 times=m.times,
-                title=f"[g{pair[0]},g{pair[1]}] (g{k}): {label}, original (dotted) vs "
-                f"nilpotent approximation (solid), A = {m.amplitude:g}",
+                title=f"[g{pair[0]},g{pair[1]}] (g{k}): {label}, original (solid) vs "
+                f"nilpotent approximation (dashed), A = {m.amplitude:g}",
             )
             stem = (
                 f"fig{n + 5}_g{k}_comparison"
@@ -555,7 +559,8 @@ def _write_figures(data: ReproductionData, files: _Files) -> dict[str, Any]:
     }
 
 
-def _write_animations(data: ReproductionData, files: _Files) -> dict[tuple[int, int], Any]:
+def _write_animations(data: ReproductionData, files: _Files, bar: Any = None
+                      ) -> dict[tuple[int, int], Any]:
     """Animations of the robot (Section 4 fields) and of its approximation, per bracket."""
     from nilpotent.models.trident import TridentGeometry
     from nilpotent.viz import animate_motion_comparison, save_animation
@@ -564,6 +569,9 @@ def _write_animations(data: ReproductionData, files: _Files) -> dict[tuple[int, 
     out: dict[tuple[int, int], Any] = {}
     for pair in BRACKET_PAIRS:
         m, k = data.motions["body", pair], data.s4_names[pair]
+        stage = f"animation g{k}: [g{pair[0]},g{pair[1]}], {data.settings.frames} frames"
+        if bar is not None:
+            bar.update(detail=stage)
         anim = animate_motion_comparison(
             m.original,
             m.approximate,

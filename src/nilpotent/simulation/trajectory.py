@@ -6,7 +6,7 @@ The one trajectory type of the project: simulations, plans
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -16,6 +16,7 @@ from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.compile import CompiledSystem, compile_system
 from nilpotent.numeric.integrate import Status, integrate
+from nilpotent.numeric.sampled import as_signal
 from nilpotent.numeric.signals import FunctionSignal, Signal
 from nilpotent.numeric.types import State, States, Times
 
@@ -112,9 +113,11 @@ class Trajectory:
 
 def simulate(
     sys: ControlSystem | CompiledSystem,
-    signal: Signal | FunctionSignal,
+    signal: Signal | FunctionSignal | Callable[[float], Any] | tuple[Any, Any],
     x0: Any = None,
     *,
+    duration: float | None = None,
+    hold: str = "linear",
     samples: int = 201,
     times: Sequence[float] | np.ndarray | None = None,
     method: str = "adaptive",
@@ -133,12 +136,20 @@ def simulate(
         The system, symbolic or compiled.
     signal:
         A single control (a :class:`~nilpotent.numeric.signals.Signal` of
-        batch 1) or a :class:`~nilpotent.numeric.signals.FunctionSignal`
-        (integrated with ``solve_ivp``: ``method``/``engine`` must then be left
-        at their defaults or be ``"adaptive"``/``"scipy"``).
+        batch 1), a :class:`~nilpotent.numeric.signals.FunctionSignal`, a
+        callable ``u(t) -> (m,)`` (with ``duration``) or sampled inputs ``(T, U)``,
+        ``T`` of shape ``(K,)`` from 0, ``U`` of shape ``(K, m)``
+        (:func:`~nilpotent.numeric.sampled.as_signal`, the one conversion).  A
+        function input (a callable, or samples with ``hold="linear"``) is
+        integrated with ``solve_ivp``: ``method``/``engine`` must then be left at
+        their defaults or be ``"adaptive"``/``"scipy"``.
     x0:
         A sequence of numbers or, for a ``ControlSystem``, a mapping
         ``{coordinate name: number}`` (missing names are 0).
+    duration:
+        End of a callable input's interval ``[0, duration]``.
+    hold:
+        How samples ``(T, U)`` are read between times: ``"linear"`` or ``"zero"``.
     samples:
         Equally spaced times from 0 to the signal's duration to record (≥ 2).
     times:
@@ -156,6 +167,7 @@ def simulate(
     compiled = as_compiled(sys)
     if isinstance(x0, Mapping) and isinstance(sys, ControlSystem):
         x0 = sys.point(x0)
+    signal = as_signal(signal, compiled.m, duration=duration, hold=hold)
     if signal.m != compiled.m:
         raise OptionError(f"the signal has {signal.m} inputs, the system {compiled.m} fields")
     if isinstance(signal, Signal) and signal.batch != 1:

@@ -270,17 +270,35 @@ def save_animation(
     """
     from matplotlib.animation import FFMpegWriter, PillowWriter
 
+    from nilpotent.progress import progress
+
     out = Path(directory)
     if not out.is_dir():
         raise OptionError(f"cannot save the animation: {out} is not a folder")
     gif = out / f"{stem}.gif"
-    # matplotlib's stubs say int; the writers take any positive frame rate
-    anim.animation.save(gif, writer=PillowWriter(fps=fps), dpi=dpi)  # pyright: ignore[reportArgumentType]
-    video: Path | None = None
-    if mp4 and FFMpegWriter.isAvailable():
-        video = out / f"{stem}.mp4"
-        anim.animation.save(video, writer=FFMpegWriter(fps=fps), dpi=dpi)  # pyright: ignore[reportArgumentType]
-    frames = [_frame_png(anim, k, dpi) for k in range(anim.frames)]
+    with_mp4 = mp4 and FFMpegWriter.isAvailable()
+    passes: tuple[str, ...] = ("GIF", "MP4", "HTML player") if with_mp4 else ("GIF",
+                                                                              "HTML player")
+    n = anim.frames
+    with progress(f"animation {stem}: frames", total=n * len(passes)) as bar:
+
+        def frame_done(k: int, _total: int, done: int) -> None:
+            bar.update(done + k + 1)
+
+        # matplotlib's stubs say int; the writers take any positive frame rate
+        anim.animation.save(gif, writer=PillowWriter(fps=fps), dpi=dpi,  # pyright: ignore[reportArgumentType]
+                            progress_callback=lambda k, t: frame_done(k, t, 0))
+        bar.update(n, detail=passes[1])
+        video: Path | None = None
+        if with_mp4:
+            video = out / f"{stem}.mp4"
+            anim.animation.save(video, writer=FFMpegWriter(fps=fps), dpi=dpi,  # pyright: ignore[reportArgumentType]
+                                progress_callback=lambda k, t: frame_done(k, t, n))
+            bar.update(2 * n, detail=passes[-1])
+        frames = []
+        for k in range(n):
+            frames.append(_frame_png(anim, k, dpi))
+            bar.update((len(passes) - 1) * n + k + 1)
     page = out / f"{stem}.html"
     page.write_text(html_player(frames, title=anim.title, fps=fps), encoding="utf-8")
     return AnimationFiles(gif, page, video, anim.frames)

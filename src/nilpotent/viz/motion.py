@@ -4,7 +4,8 @@
   three vertices and the three wheels in the plane, the robot drawn at the start
   (faded) and at the end, and the six coordinates against time;
 * :func:`plot_motion_comparison` — the same motion for the original fields and for
-  the nilpotent approximation overlaid (original dotted, approximation solid),
+  the nilpotent approximation overlaid (original solid, approximation dashed and
+  drawn above it: the convention of every figure, ``docs/conventions.md``),
   with the coordinate histories side by side.
 
 Trajectories are arrays ``q`` of shape ``(T, 6)`` in the coordinates the
@@ -48,6 +49,8 @@ def _trails(
     width: float,
     label_suffix: str = "",
     labels: bool = True,
+    alpha: float = 1.0,
+    zorder: float = 5.0,
 ) -> None:
     centre = geometry.body_centre(q)
     vertices = geometry.vertices(q)
@@ -58,8 +61,9 @@ def _trails(
         color="black",
         linestyle=style,
         linewidth=width,
+        alpha=alpha,
         label=f"body centre{label_suffix}" if labels else None,
-        zorder=5,
+        zorder=zorder,
     )
     for i in range(3):
         ax.plot(
@@ -68,9 +72,9 @@ def _trails(
             color=LEG_COLORS[i],
             linestyle=style,
             linewidth=0.8 * width,
-            alpha=0.6,
+            alpha=0.6 * alpha,
             label=f"vertex {i + 1}{label_suffix}" if labels else None,
-            zorder=5,
+            zorder=zorder,
         )
         ax.plot(
             wheels[:, i, 0],
@@ -78,8 +82,9 @@ def _trails(
             color=LEG_COLORS[i],
             linestyle=style,
             linewidth=width,
+            alpha=alpha,
             label=f"wheel {i + 1}{label_suffix}" if labels else None,
-            zorder=5,
+            zorder=zorder,
         )
 
 
@@ -131,7 +136,7 @@ def plot_bracket_motion(
     geom = geometry if geometry is not None else TridentGeometry()
     fig = Figure(figsize=figsize, layout="constrained")
     ax, axt = fig.subplots(1, 2, width_ratios=(1.25, 1))
-    draw_trident(ax, qq[0], geom, alpha=0.35, linestyle="--", label="start")
+    draw_trident(ax, qq[0], geom, alpha=0.35, linestyle=":", label="start")
     draw_trident(ax, qq[-1], geom, alpha=1.0, label="end")
     _trails(ax, geom, qq, style="-", width=1.4)
     _frame_plane(ax, geom, [qq])
@@ -159,9 +164,10 @@ def plot_motion_comparison(
 ) -> tuple[Figure, tuple[Axes, Axes]]:
     """One bracket motion for the original fields and the approximation, overlaid (Figs 5–7).
 
-    The original system's trajectories are dotted, the approximation's solid;
-    the robot is drawn at the start and at both ends.  The right panel shows
-    ``q(t) − q(0)`` for both (original dotted).
+    The original system's trajectories are solid (wide, light), the approximation's
+    dashed and drawn above them, as in every figure of the package
+    (:data:`nilpotent.viz.simulation.ORIGINAL_STYLE`); the robot is drawn at the start
+    and at both ends.  The right panel shows ``q(t) − q(0)`` for both.
 
     Parameters
     ----------
@@ -180,30 +186,27 @@ def plot_motion_comparison(
     geom = geometry if geometry is not None else TridentGeometry()
     fig = Figure(figsize=figsize, layout="constrained")
     ax, axt = fig.subplots(1, 2, width_ratios=(1.25, 1))
-    draw_trident(ax, qo[0], geom, alpha=0.3, linestyle="--", label="start")
-    draw_trident(
-        ax, qo[-1], geom, alpha=0.6, linestyle=":", body_color="#BBBBBB", label="end, original"
-    )
-    draw_trident(ax, qa[-1], geom, alpha=1.0, label="end, approximation")
-    _trails(ax, geom, qo, style=":", width=1.6, label_suffix=" (original)")
-    _trails(ax, geom, qa, style="-", width=1.0, label_suffix=" (approx.)", labels=False)
+    draw_trident(ax, qo[0], geom, alpha=0.3, linestyle=":", label="start")
+    draw_trident(ax, qo[-1], geom, alpha=0.45, label="end, original")
+    draw_trident(ax, qa[-1], geom, alpha=1.0, linestyle="--", body_color="#BBBBBB",
+                 label="end, approximation", zorder=6.0)
+    _trails(ax, geom, qo, style="-", width=2.4, alpha=0.45, zorder=5.0)
+    _trails(ax, geom, qa, style="--", width=1.0, labels=False, zorder=6.0)
     _frame_plane(ax, geom, [qo, qa])
-    ax.plot([], [], color="black", linestyle="-", label="approximation: solid")
+    ax.plot([], [], color="black", linestyle="-", linewidth=2.4, alpha=0.45,
+            label="original (solid)")
+    ax.plot([], [], color="black", linestyle="--", linewidth=1.0, label="approximation (dashed)")
     ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.0, 1.0), frameon=False)
     t = np.arange(qo.shape[0], dtype=float) if times is None else np.asarray(times, float)
     for j in range(6):
-        axt.plot(t, qo[:, j] - qo[0, j], color=_COORD_COLORS[j], linestyle=":", linewidth=1.8)
-        axt.plot(
-            t,
-            qa[:, j] - qa[0, j],
-            color=_COORD_COLORS[j],
-            linestyle="-",
-            linewidth=0.9,
-            label=COORDINATE_LABELS[j],
-        )
+        axt.plot(t, qo[:, j] - qo[0, j], color=_COORD_COLORS[j], linestyle="-", linewidth=2.4,
+                 alpha=0.45, zorder=2.0, label=COORDINATE_LABELS[j])
+        axt.plot(t, qa[:, j] - qa[0, j], color=_COORD_COLORS[j], linestyle="--",
+                 linewidth=1.0, zorder=3.0)
     axt.set_xlabel("t (s)" if times is not None else "sample")
     axt.set_ylabel("q(t) − q(0)  (lengths / r, angles rad)")
-    axt.legend(fontsize=7, ncol=2, title="solid: approx., dotted: original", title_fontsize=7)
+    axt.legend(fontsize=7, ncol=2, title="solid: original, dashed: approximation",
+               title_fontsize=7)
     axt.grid(True, linewidth=0.3, alpha=0.5)
     if title:
         fig.suptitle(title)

@@ -20,8 +20,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib.figure import Figure
 
-from nilpotent.planning.controls import input_at
-
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
 
@@ -75,30 +73,11 @@ def _draw_plane(ax, plan: Plan, geometry) -> None:
 
 
 def plot_plan(plan: Plan) -> Figure:
-    """A figure of the plan: the motion, the error per iteration, the inputs."""
-    fig = Figure(figsize=(13, 4.2), layout="constrained")
-    ax_plane, ax_err, ax_u = fig.subplots(1, 3, width_ratios=(1.3, 1, 1.2))
-    _draw_plane(ax_plane, plan, _geometry(plan))
-    ax_plane.set_title(f"{plan.system.name}: {len(plan.segments)} segments")
-    errors = [plan.initial_error] + [it.error for it in plan.iterations]
-    ax_err.semilogy(range(len(errors)), np.maximum(errors, 1e-300), "o-")
-    ax_err.axhline(plan.tol, color="gray", ls=":", label=f"tol {plan.tol:g}")
-    ax_err.set_xlabel("iteration")
-    ax_err.set_ylabel("distance to the goal")
-    ax_err.set_title(f"anchor {plan.anchor}, approximation {plan.builder}")
-    ax_err.legend(fontsize=7)
-    if plan.segments:
-        t = np.linspace(0.0, plan.duration, 600)
-        u = np.array([input_at(plan.segments, s) for s in t])
-        for i in range(u.shape[1]):
-            ax_u.plot(t, u[:, i], lw=1.0, label=f"u{i + 1}")
-        edges = np.cumsum([s.duration for s in plan.segments])[:-1]
-        for e in edges:
-            ax_u.axvline(e, color="gray", lw=0.4)
-        ax_u.legend(fontsize=7)
-    ax_u.set_xlabel("t")
-    ax_u.set_title("inputs")
-    return fig
+    """The figure of a plan: :func:`nilpotent.viz.plan_world.plot_plan_world` (the one plan
+    figure, also behind ``nilpotent plan --plot`` and ``GlobalPlan.plot()``)."""
+    from nilpotent.viz.plan_world import plot_plan_world
+
+    return plot_plan_world(plan)
 
 
 def animate_plan(plan: Plan, path: str | Path, *, frames: int = 60, fps: float = 12.0,

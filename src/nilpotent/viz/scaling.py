@@ -119,7 +119,8 @@ def plot_error_scaling(
     ax.set_xlabel("amplitude A of the periodic input")
     ax.set_ylabel("error after one period (lengths / r, angles rad)")
     ax.grid(True, which="both", linewidth=0.3, alpha=0.5)
-    ax.legend(fontsize=8)
+    if errors:  # no series (every group exact): no legend to draw
+        ax.legend(fontsize=8)
     if title:
         ax.set_title(title)
     return fig, ax, slopes

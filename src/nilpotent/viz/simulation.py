@@ -17,7 +17,16 @@ import numpy as np
 from nilpotent.errors import OptionError
 from nilpotent.numeric.fits import loglog_line
 
-__all__ = ["plot_comparison", "plot_scaling_study", "plot_sweep", "plot_trajectory"]
+__all__ = [
+    "APPROXIMATION_STYLE",
+    "ORIGINAL_STYLE",
+    "error_floor",
+    "plot_comparison",
+    "plot_scaling_study",
+    "plot_sweep",
+    "plot_trajectory",
+    "style_legend",
+]
 
 
 def _figure_axes(ax: Any) -> tuple[Any, Any]:
@@ -29,6 +38,31 @@ def _figure_axes(ax: Any) -> tuple[Any, Any]:
     return fig, fig.add_subplot(1, 1, 1)
 
 
+ORIGINAL_STYLE = {"linestyle": "-", "linewidth": 2.8, "alpha": 0.45, "zorder": 2.0}
+"""How the original system is drawn in every figure (solid, wide and light, below)."""
+APPROXIMATION_STYLE = {"linestyle": "--", "linewidth": 1.2, "zorder": 3.0}
+"""How the nilpotent approximation is drawn in every figure (dashed, above the original so
+that it stays visible where the two agree): the convention of ``docs/conventions.md``."""
+STATE_LABEL = "coordinate value (model units; angles in rad)"
+"""The y-label of coordinates against time (models carry no units of their own)."""
+
+
+def style_legend(ax: Any, **kwargs: Any) -> Any:
+    """A legend with the line-style convention stated: the labelled lines, then
+    ``original (solid)`` and ``approximation (dashed)`` in black."""
+    ax.plot([], [], color="black", label="original (solid)", **ORIGINAL_STYLE)
+    ax.plot([], [], color="black", label="approximation (dashed)", **APPROXIMATION_STYLE)
+    return ax.legend(**{"loc": "best", "fontsize": "small", **kwargs})
+
+
+def error_floor(tolerance: float | None, default: float = 1e-12) -> float:
+    """The lowest value an error axis shows: the integration tolerance (errors below it
+    are integration noise, not the approximation's), ``default`` when it is unknown."""
+    if tolerance is None or not np.isfinite(tolerance) or tolerance <= 0:
+        return default
+    return float(tolerance)
+
+
 def plot_trajectory(traj: Any, ax: Any = None) -> tuple[Any, Any]:
     """Every coordinate of a :class:`~nilpotent.simulation.Trajectory` against time."""
     fig, ax = _figure_axes(ax)
@@ -36,8 +70,8 @@ def plot_trajectory(traj: Any, ax: Any = None) -> tuple[Any, Any]:
     names = traj.coordinates or tuple(f"x{k + 1}" for k in range(n))
     for k, name in enumerate(names):
         ax.plot(traj.times, traj.states[:, k], label=name)
-    ax.set_xlabel("t")
-    ax.set_ylabel("state")
+    ax.set_xlabel("time t (model time units)")
+    ax.set_ylabel(STATE_LABEL)
     ax.set_title(traj.system or "trajectory")
     ax.legend(loc="best", fontsize="small")
     return fig, ax
@@ -46,6 +80,10 @@ def plot_trajectory(traj: Any, ax: Any = None) -> tuple[Any, Any]:
 def plot_comparison(comp: Any, fig: Any = None) -> tuple[Any, Any]:
     """Both trajectories of a :class:`~nilpotent.simulation.Comparison` (model
     coordinates) and the error per weight group against time.
+
+    The original is solid, the approximation dashed and drawn above it
+    (:data:`ORIGINAL_STYLE`, :data:`APPROXIMATION_STYLE`); the error axis starts at
+    the integration tolerance (:func:`error_floor`).
 
     Returns ``(figure, (ax_states, ax_errors))``.
     """
@@ -56,17 +94,24 @@ def plot_comparison(comp: Any, fig: Any = None) -> tuple[Any, Any]:
     fig = fig if fig is not None else Figure(figsize=(10, 4.2), layout="constrained")
     ax1, ax2 = fig.subplots(1, 2)
     for k, name in enumerate(comp.system.coordinate_names):
-        (line,) = ax1.plot(comp.times, comp.original[:, k], label=f"{name}")
-        ax1.plot(comp.times, comp.approximate[:, k], "--", color=line.get_color())
-    ax1.set_xlabel("t")
-    ax1.set_title(f"{comp.system.name}: original (solid), approximation (dashed)")
-    ax1.legend(loc="best", fontsize="small")
+        (line,) = ax1.plot(comp.times, comp.original[:, k], label=f"{name}", **ORIGINAL_STYLE)
+        ax1.plot(comp.times, comp.approximate[:, k], color=line.get_color(),
+                 **APPROXIMATION_STYLE)
+    ax1.set_xlabel("time t (model time units)")
+    ax1.set_ylabel(STATE_LABEL)
+    ax1.set_title(f"{comp.system.name}: bracket motion [X{comp.bracket[0]},X{comp.bracket[1]}]")
+    style_legend(ax1, fontsize="x-small", ncol=2 if comp.system.n > 3 else 1)
     diff = np.abs(comp.original_y - comp.approximate_y)
+    floor = error_floor(comp.tolerance)
     for w, idx in weight_groups(comp.weights):
         err = diff[:, list(idx)].max(axis=1)
-        ax2.semilogy(comp.times, np.maximum(err, 1e-17), label=f"weight {w}")
-    ax2.set_xlabel("t")
-    ax2.set_title(f"|y − ŷ| per weight group, A = {comp.amplitude:g}")
+        ax2.semilogy(comp.times, np.maximum(err, floor), label=f"weight {w}")
+    ax2.axhline(floor, color="gray", linestyle=":", linewidth=0.8,
+                label=f"integration tolerance {floor:.0e}")
+    ax2.set_ylim(bottom=floor / 2)
+    ax2.set_xlabel("time t (model time units)")
+    ax2.set_ylabel("|y − ŷ| (privileged coordinates, max in the group)")
+    ax2.set_title(f"error per weight group, A = {comp.amplitude:g}")
     ax2.legend(loc="best", fontsize="small")
     return fig, (ax1, ax2)
 

@@ -333,9 +333,9 @@ def _field_lines(fields: Sequence[Sequence[sp.Expr]], coords: Sequence[sp.Symbol
             a = -e if negative else e
             term = f"∂{c}" if a == 1 else (f"({a})·∂{c}" if isinstance(a, sp.Add) else f"{a}·∂{c}")
             if text:
-                text += (" − " if negative else " + ") + term
-            else:
-                text = ("−" if negative else "") + term
+                text += (" - " if negative else " + ") + term  # ASCII minus, as sympy's
+            else:  # text in the other lines: the formulas paste as they print
+                text = ("-" if negative else "") + term
         out.append(f"  X̂{i} = " + (text or "0"))
     return out
 

@@ -352,7 +352,9 @@ def taylor_integrator(
         hy = _heyoka()
         sysd, _ = _rhs(system, int(harmonics), used, tuple(frozen))
         bs = int(hy.recommended_simd_size())
-        with stdout_to_stderr():
+        from nilpotent.progress import COMPILING, progress
+
+        with stdout_to_stderr(), progress(COMPILING):
             use_safe_disk_cache(hy)
             # heyoka sizes the parameters by the largest index the expressions use
             ta = hy.taylor_adaptive_batch(sysd, np.zeros((len(sysd), bs)), tol=float(tol))

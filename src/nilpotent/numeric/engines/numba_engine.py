@@ -85,10 +85,15 @@ class NumbaEngine(Engine):
         final = np.empty_like(xs)
         samples = np.full((batch, times.size, system.n), np.nan)
         info = np.zeros((batch, 4))
-        with _numba_threads(threads):
+        from nilpotent.progress import COMPILING, progress
+
+        first = "numba-called" not in system._memo and not kernels_cached(system)
+        stage = progress(COMPILING) if first else contextlib.nullcontext()
+        with stage, _numba_threads(threads):
             mod.integrate_batch(
                 xs, signal.durations, signal.omegas, signal.constant, signal.cos, signal.sin,
                 times, adaptive, steps, rtol, atol, max_steps, min_step, bound, final, samples,
                 info,
             )
+        system._memo["numba-called"] = True
         return final, samples, info
