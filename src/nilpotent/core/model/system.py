@@ -115,6 +115,7 @@ class ControlSystem:
                 raise ModelError(
                     f"model {self.name!r}: geometry uses unknown names {', '.join(sorted(unknown))}"
                 )
+        _check_real(self.name, coords, flds, params)
         object.__setattr__(self, "coordinates", coords)
         object.__setattr__(self, "fields", flds)
         object.__setattr__(self, "parameters", params)
@@ -232,3 +233,33 @@ class ControlSystem:
 
     def _repr_html_(self) -> str:
         return typeset.system_display(self).html()
+
+
+def _check_real(
+    name: str,
+    coords: tuple[sp.Symbol, ...],
+    fields: tuple[tuple[Expr, ...], ...],
+    params: tuple[tuple[str, Expr], ...],
+) -> None:
+    """Refuse a field component that is not real at the real points of an open set.
+
+    With the coordinates read as real numbers and the parameters given their
+    values, sympy rewrites ``sqrt(-x**2)`` as ``I*Abs(x)`` and ``sqrt(-exp(x))``
+    as ``I*exp(x/2)``: a component containing the imaginary unit ``I`` then is
+    not real wherever it is non-zero, and no computation could give it a real
+    value (a numeric one would silently drop the imaginary part).  Components
+    that are real on some open set and complex elsewhere (``sqrt(1 - x**2)``)
+    are kept: they evaluate to NaN outside their domain.
+    """
+    real: dict[sp.Basic, sp.Basic] = {c: sp.Dummy(str(c), real=True) for c in coords}
+    real.update({sp.Symbol(k): v for k, v in params})
+    for i, f in enumerate(fields, start=1):
+        for c, e in zip(coords, f, strict=True):
+            seen = e if e.has(sp.I) else e.xreplace(real)
+            if seen.has(sp.I):
+                shown = str(seen).replace("_", "") if seen is not e else str(e)
+                raise ModelError(
+                    f"model {name!r}: field X{i}[{c}] is not real: {e} is {shown} for real "
+                    "coordinates, which contains the imaginary unit I (the square root "
+                    "or a fractional power of a negative quantity?)"
+                )
