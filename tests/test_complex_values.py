@@ -136,7 +136,8 @@ def test_sqrt_one_minus_x_squared_integrated(engine):
 
 # --- fields that are not real anywhere: refused ------------------------------------
 @pytest.mark.parametrize("field", [sp.sqrt(-x**2), sp.sqrt(-sp.exp(y)), sp.sqrt(-2) * x,
-                                   sp.acosh(0) * x, sp.log(-2) + x])
+                                   sp.acosh(0) * x, sp.log(-2) + x,
+                                   sp.Integer(-8) ** sp.Rational(1, 3) * x])
 def test_a_field_with_the_imaginary_unit_is_refused_by_the_model(field):
     with pytest.raises(ModelError, match=r"field X1\[x\] is not real"):
         ControlSystem("imaginary", (x, y), ((field, 1),))
@@ -154,11 +155,17 @@ def test_a_parameter_value_making_a_field_imaginary_is_refused():
 
 def test_model_text_with_a_complex_constant_is_refused():
     names = {"x": x}
-    for text in ["sqrt(-1)*x", "(-2)**(1/2)*x", "log(-2)*x", "acosh(0)*x"]:
+    # (-8)**(1/3) is sympy's principal cube root 2*(-1)**(1/3) = 1 + I*sqrt(3), not -2
+    for text in ["sqrt(-1)*x", "(-2)**(1/2)*x", "log(-2)*x", "acosh(0)*x", "(-8)**(1/3)*x",
+                 "x + (-1/2)**(3/2)"]:
         with pytest.raises(ExpressionError):
             parse_expression(text, names)
-    with pytest.raises(NilpotentError, match=r"complex|not real"):
-        system_from_dict({"coordinates": ["x"], "fields": [{"x": "sqrt(-1)*x"}]})
+    for text in ["sqrt(-1)*x", "(-8)**(1/3)*x"]:
+        with pytest.raises(NilpotentError, match=r"complex|not real"):
+            system_from_dict({"coordinates": ["x"], "fields": [{"x": text}]})
+    # real roots stay: 8**(1/3) is 2, (-8)**2 is 64
+    s = system_from_dict({"coordinates": ["x"], "fields": [{"x": "8**(1/3)*x + (-8)**2"}]})
+    assert s.fields[0][0] == 2 * x + 64
 
 
 @pytest.mark.parametrize("field", [sp.I * x, sp.sqrt(-x**2), sp.asin(2) * x, sp.acos(3) + x])
@@ -306,3 +313,18 @@ def test_engines_are_nan_exactly_where_the_value_is_not_real(family_engines, int
             else:
                 assert math.isclose(got, expected, rel_tol=1e-12, abs_tol=1e-12), (
                     name, e, point, exact, got)
+
+
+def test_generated_code_holds_no_imaginary_unit_and_still_shares_subexpressions():
+    from nilpotent.numeric.compile import _jacobian_source, _numba_source, _numpy_source
+
+    shared = sp.sin(x * y + z)
+    c = compile_fields((x, y, z), ((ISSUE * shared, shared**2, 0),), name="shared",
+                       backend="numpy")
+    prep = c._prepared
+    texts = [_numpy_source(prep, "shared"), _jacobian_source(c.fields, 3, "shared")]
+    if numba_available():
+        texts.append(_numba_source(prep, "shared"))
+    for text in texts:
+        assert "1j" not in text and "I" not in text
+    assert prep.replacements  # the common sin(...) is computed once

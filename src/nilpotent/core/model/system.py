@@ -245,21 +245,37 @@ def _check_real(
 
     With the coordinates read as real numbers and the parameters given their
     values, sympy rewrites ``sqrt(-x**2)`` as ``I*Abs(x)`` and ``sqrt(-exp(x))``
-    as ``I*exp(x/2)``: a component containing the imaginary unit ``I`` then is
-    not real wherever it is non-zero, and no computation could give it a real
+    as ``I*exp(x/2)``: a component containing the imaginary unit ``I`` (or a
+    non-integer power of a negative number, ``(-1)**(1/3)``) then is not real
+    wherever it is non-zero, and no computation could give it a real
     value (a numeric one would silently drop the imaginary part).  Components
     that are real on some open set and complex elsewhere (``sqrt(1 - x**2)``)
     are kept: they evaluate to NaN outside their domain.
     """
     real: dict[sp.Basic, sp.Basic] = {c: sp.Dummy(str(c), real=True) for c in coords}
+    back = {d: c for c, d in real.items()}
     real.update({sp.Symbol(k): v for k, v in params})
     for i, f in enumerate(fields, start=1):
         for c, e in zip(coords, f, strict=True):
-            seen = e if e.has(sp.I) else e.xreplace(real)
-            if seen.has(sp.I):
-                shown = str(seen).replace("_", "") if seen is not e else str(e)
-                raise ModelError(
-                    f"model {name!r}: field X{i}[{c}] is not real: {e} is {shown} for real "
-                    "coordinates, which contains the imaginary unit I (the square root "
-                    "or a fractional power of a negative quantity?)"
+            seen = e if _imaginary(e) else e.xreplace(real)
+            if _imaginary(seen):
+                shown = "" if seen is e else (
+                    " (" + str(seen.xreplace(back)) + " for real coordinates"
+                    + (" and the parameters' values" if params else "") + ")"
                 )
+                raise ModelError(
+                    f"model {name!r}: field X{i}[{c}] is not real: {e}{shown} holds the "
+                    "imaginary unit or a fractional power of a negative number (the square "
+                    "root of a negative quantity?)"
+                )
+
+
+def _imaginary(e: sp.Basic) -> bool:
+    """Whether ``e`` holds ``I`` or a non-integer power of a negative number (``(-1)**(1/3)``)."""
+    for part in sp.preorder_traversal(e):
+        if part is sp.I:
+            return True
+        if (isinstance(part, sp.Pow) and part.base.is_number and part.exp.is_number
+                and part.base.is_negative is True and part.exp.is_integer is False):
+            return True
+    return False
