@@ -328,3 +328,16 @@ def test_generated_code_holds_no_imaginary_unit_and_still_shares_subexpressions(
     for text in texts:
         assert "1j" not in text and "I" not in text
     assert prep.replacements  # the common sin(...) is computed once
+
+
+def test_an_outline_with_an_imaginary_centre_is_refused():
+    raw = {
+        "name": "imaginary-disc", "coordinates": ["x", "y"], "parameters": {"p": -1},
+        "fields": [{"x": "1"}, {"y": "1"}],
+        "geometry": {"discs": [{"center": ["x + sqrt(p)", "y"], "radius": "0.1"}]},
+    }
+    # sqrt(p) = I: the centre x + I is no point of the plane (its real part would be x)
+    with pytest.raises(ModelError, match=r"geometry\.discs\[0\].* is not real"):
+        system_from_dict(raw)
+    raw["parameters"] = {"p": 4}
+    assert system_from_dict(raw).geometry is not None

@@ -22,7 +22,7 @@ from functools import cached_property
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr, negative_root
 from nilpotent.core.model.outline import Limits, Outline
 from nilpotent.errors import ModelError
 
@@ -116,6 +116,8 @@ class ControlSystem:
                     f"model {self.name!r}: geometry uses unknown names {', '.join(sorted(unknown))}"
                 )
         _check_real(self.name, coords, flds, params)
+        if self.geometry is not None:
+            _check_real_geometry(self.name, coords, self.geometry, params)
         object.__setattr__(self, "coordinates", coords)
         object.__setattr__(self, "fields", flds)
         object.__setattr__(self, "parameters", params)
@@ -272,10 +274,20 @@ def _check_real(
 
 def _imaginary(e: sp.Basic) -> bool:
     """Whether ``e`` holds ``I`` or a non-integer power of a negative number (``(-1)**(1/3)``)."""
-    for part in sp.preorder_traversal(e):
-        if part is sp.I:
-            return True
-        if (isinstance(part, sp.Pow) and part.base.is_number and part.exp.is_number
-                and part.base.is_negative is True and part.exp.is_integer is False):
-            return True
-    return False
+    return any(part is sp.I or negative_root(part) for part in sp.preorder_traversal(e))
+
+
+def _check_real_geometry(
+    name: str, coords: tuple[sp.Symbol, ...], geometry: Outline,
+    params: tuple[tuple[str, Expr], ...],
+) -> None:
+    """Refuse an outline expression that is not real (as :func:`_check_real` for fields)."""
+    real: dict[sp.Basic, sp.Basic] = {c: sp.Dummy(str(c), real=True) for c in coords}
+    real.update({sp.Symbol(k): v for k, v in params})
+    for label, e in zip(geometry.labels(), geometry.expressions(), strict=True):
+        if _imaginary(e) or _imaginary(as_expr(e).xreplace(real)):
+            raise ModelError(
+                f"model {name!r}: {label} = {e} is not real for real coordinates"
+                + (" and the parameters' values" if params else "")
+                + " (the square root or a fractional power of a negative quantity?)"
+            )
