@@ -259,7 +259,7 @@ def _check_real(
     real.update({sp.Symbol(k): v for k, v in params})
     for i, f in enumerate(fields, start=1):
         for c, e in zip(coords, f, strict=True):
-            seen = e if _imaginary(e) else e.xreplace(real)
+            seen = e if _imaginary(e) or not _may_turn_imaginary(e) else e.xreplace(real)
             if _imaginary(seen):
                 shown = "" if seen is e else (
                     " (" + str(seen.xreplace(back)) + " for real coordinates"
@@ -270,6 +270,16 @@ def _check_real(
                     "imaginary unit or a fractional power of a negative number (the square "
                     "root of a negative quantity?)"
                 )
+
+
+def _may_turn_imaginary(e: sp.Basic) -> bool:
+    """Whether reading the symbols as real numbers may make sympy bring out an ``I``.
+
+    Only a power with a non-integer exponent (``sqrt(-x**2)`` → ``I*Abs(x)``) or a
+    logarithm can (the grammar's other functions are real on the reals); the
+    rewriting is skipped otherwise: it is the costly part of the check.
+    """
+    return e.has(sp.log) or any(p.exp.is_integer is not True for p in e.atoms(sp.Pow))
 
 
 def _imaginary(e: sp.Basic) -> bool:
@@ -285,7 +295,8 @@ def _check_real_geometry(
     real: dict[sp.Basic, sp.Basic] = {c: sp.Dummy(str(c), real=True) for c in coords}
     real.update({sp.Symbol(k): v for k, v in params})
     for label, e in zip(geometry.labels(), geometry.expressions(), strict=True):
-        if _imaginary(e) or _imaginary(as_expr(e).xreplace(real)):
+        if _imaginary(e) or (_may_turn_imaginary(e)
+                             and _imaginary(as_expr(e).xreplace(real))):
             raise ModelError(
                 f"model {name!r}: {label} = {e} is not real for real coordinates"
                 + (" and the parameters' values" if params else "")
