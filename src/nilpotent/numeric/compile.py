@@ -133,9 +133,49 @@ class _Prepared:
     reduced: tuple[sp.Expr, ...]  # n*m entries, index i*n + j
 
 
-def _prepare(fields: tuple[tuple[sp.Expr, ...], ...], n: int) -> _Prepared:
+def _has_imaginary(exprs: Sequence[sp.Basic]) -> bool:
+    return any(isinstance(e, sp.Basic) and e.has(sp.I) for e in exprs)
+
+
+def _real_cse(
+    flat: Sequence[sp.Expr],
+) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
+    """``sympy.cse`` of real expressions that keeps them free of the imaginary unit.
+
+    The ``"basic"`` optimisations pull a sign out of a power's base, and sympy
+    then evaluates ``(-a)**0.5`` with ``a ≥ 0`` as ``1.0*I*a**0.5``: printed as
+    ``1j*…``, numpy computes a complex number and storing it into the float
+    array silently drops its imaginary part (a point outside the field's domain
+    gets the value 0 instead of NaN), and numba refuses to compile.  Whenever
+    that happens the plain elimination is used instead (it only replaces
+    repeated subexpressions by symbols, so no sign is moved), and without any
+    elimination if even that shows an ``I``.  The printed code then computes
+    ``(-a)**0.5`` in floating point: NaN for ``a > 0``, exactly 0 at ``a = 0``
+    (where the exact value ``I·sqrt(a)`` is the real 0 too).
+    """
+    for optimizations in ("basic", None):
+        reps, reduced = sp.cse(list(flat), symbols=sp.numbered_symbols("c"),
+                               optimizations=optimizations)
+        reps_l: list[tuple[sp.Symbol, sp.Expr]] = list(reps)  # type: ignore[arg-type]
+        reduced_l: list[sp.Expr] = list(reduced)  # type: ignore[arg-type]
+        if not _has_imaginary([e for _, e in reps_l] + reduced_l):
+            return reps_l, reduced_l
+    return [], list(flat)
+
+
+def _refuse_imaginary(exprs: Sequence[sp.Basic], name: str) -> None:
+    """Refuse to print code for an expression with ``I`` (its value would lose a part)."""
+    for e in exprs:
+        if isinstance(e, sp.Basic) and e.has(sp.I):
+            raise ModelError(f"{name}: the expression {e} is not real (it contains I)")
+
+
+def _prepare(
+    fields: tuple[tuple[sp.Expr, ...], ...], n: int, name: str = "system"
+) -> _Prepared:
     flat = [fields[i][j] for i in range(len(fields)) for j in range(n)]
-    reps, reduced = sp.cse(flat, symbols=sp.numbered_symbols("c"), optimizations="basic")
+    reps, reduced = _real_cse(flat)
+    _refuse_imaginary([e for _, e in reps] + list(reduced), name)
     return _Prepared(n, len(fields), tuple(reps), tuple(as_expr(e) for e in reduced))
 
 
@@ -203,7 +243,7 @@ class CompiledSystem:
     # --- generated modules -------------------------------------------------
     @cached_property
     def _prepared(self) -> _Prepared:
-        return _prepare(self.fields, self.n)
+        return _prepare(self.fields, self.n, self.name)
 
     @cached_property
     def numpy_module(self) -> ModuleType:
@@ -326,8 +366,10 @@ def compile_fields(
         An unknown ``backend``.
     ModelError
         A field without one component per coordinate, a free symbol that is
-        neither a coordinate nor given in ``params``, or a constant that is not
-        a real number.
+        neither a coordinate nor given in ``params``, a component that is not
+        real (it contains the imaginary unit ``I`` once parameters are
+        substituted, e.g. ``sqrt(p*x**2)`` with ``p = -1``), or a constant that
+        is not a real number.
     """
     if backend not in BACKENDS:
         raise OptionError(f"unknown backend {backend!r} (choose from {', '.join(BACKENDS)})")
@@ -357,6 +399,11 @@ def compile_fields(
                     f"{name}: field X{i}, component {j + 1} uses "
                     f"{', '.join(sorted(map(str, free)))}, which is neither a coordinate "
                     "nor a parameter with a value"
+                )
+            if expr.has(sp.I):
+                raise ModelError(
+                    f"{name}: field X{i}, component {j + 1} is not real: {expr} contains "
+                    "the imaginary unit I (e.g. the square root of a negative number)"
                 )
             out.append(_float_constants(_split_shifted_trig(expr)))
         compiled.append(tuple(out))
@@ -565,8 +612,9 @@ def _jacobian_source(fields: tuple[tuple[sp.Expr, ...], ...], n: int, name: str)
         for j in range(n)
         for k in range(n)
     ]
-    reps, reduced_exprs = sp.cse(flat, symbols=sp.numbered_symbols("c"), optimizations="basic")
+    reps, reduced_exprs = _real_cse(flat)
     reduced = [as_expr(e) for e in reduced_exprs]
+    _refuse_imaginary([e for _, e in reps] + reduced, name)
     printer = NumPyPrinter({"fully_qualified_modules": True})
     m = len(fields)
     lines = [_header("numpy jacobian"), "import numpy", "", "", "def jacobian(x):"]

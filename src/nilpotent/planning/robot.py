@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TypedDict
+from typing import Any, TypedDict
 
 import numpy as np
 import shapely
@@ -54,6 +54,14 @@ def singular_margin_function(system: ControlSystem) -> Callable[[np.ndarray], np
 def _lambdify(system: ControlSystem, exprs: tuple[sp.Expr, ...]) -> Callable:
     subs = [(sp.Symbol(k), v) for k, v in system.parameters]
     return sp.lambdify([system.coordinates], [as_expr(e).subs(subs) for e in exprs], "numpy")
+
+
+def _real_or_nan(value: Any) -> Any:
+    """``value`` where it is real, NaN where its imaginary part is not 0."""
+    if not np.iscomplexobj(value):
+        return value
+    arr = np.asarray(value, dtype=np.complex128)
+    return np.where(np.imag(arr) == 0, np.real(arr), np.nan)
 
 
 class OutlinePoints(TypedDict):
@@ -125,7 +133,10 @@ class Robot:
                                  f"evaluated ({type(exc).__name__}: {exc})") from None
             out = np.empty((q.shape[0], len(vals)))
             for i, v in enumerate(vals):
-                out[:, i] = v  # constants (a disc's radius) broadcast
+                # constants (a disc's radius) broadcast; a value with an imaginary part
+                # (``sqrt(p)`` with a parameter p < 0) is no real coordinate: NaN, not
+                # its real part
+                out[:, i] = _real_or_nan(v)
         bad = ~np.isfinite(out)
         if bad.any():
             row, col = (int(k[0]) for k in np.nonzero(bad))

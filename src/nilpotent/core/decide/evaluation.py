@@ -75,6 +75,24 @@ _BALL_FUNCTIONS: dict[type, Callable[[arb], arb]] = {
 }
 
 
+def _outside_domain(func: type, v: arb) -> str | None:
+    """Why ``func(v)`` is certainly not real (``v`` an enclosure), or ``None``.
+
+    The real domains of the grammar's functions: ``asin``/``acos`` on ``[-1, 1]``,
+    ``acosh`` on ``[1, ∞)``, ``atanh`` on ``(-1, 1)``, ``log`` on ``(0, ∞)``; outside
+    them the principal value (sympy's, symengine's) is complex.
+    """
+    if func in (se.asin, se.acos) and (v > 1 or v < -1):
+        return f"{func.__name__} of a number outside [-1, 1]"
+    if func is se.acosh and v < 1:
+        return "acosh of a number below 1"
+    if func is se.atanh and (v >= 1 or v <= -1):
+        return "atanh of a number outside (-1, 1)"
+    if func is se.log and v < 0:
+        return "log of a negative number"
+    return None
+
+
 _CONSTANT = type(se.pi).__mro__[1]
 _COMPLEX = type(se.I).__mro__[2]
 
@@ -236,8 +254,9 @@ class Evaluator:
         if fn is None or len(e.args) != 1:
             raise NotEvaluable(f"cannot evaluate {func.__name__}")
         av, ad = self.dual(e.args[0])
-        if func is se.log and av < 0:
-            raise NotEvaluable(f"complex value {e} (log of a negative number)")
+        why = _outside_domain(func, av)
+        if why is not None:
+            raise NotEvaluable(f"complex value {e} ({why})")
         v = _check(fn(av))
         d = _check(_deriv(func, av) * ad) if ad != 0 else arb(0)
         return v, d
@@ -275,6 +294,15 @@ class SymbolicEvaluator:
     def value(self, e: se.Basic) -> se.Basic:
         return self.dual(e)[0]
 
+    @staticmethod
+    def _real(e: se.Basic, v: se.Basic) -> se.Basic:
+        """``v`` (the value of ``e``), refused when it holds the imaginary unit."""
+        if v.has(se.I):
+            raise NotEvaluable(f"complex value {e} = {v}")
+        if v.has(se.zoo) or v.has(se.nan) or v.has(se.oo):
+            raise NotEvaluable(f"undefined value {e} = {v}")
+        return v
+
     def _small(self, v: se.Basic) -> se.Basic:
         v = se.expand(v)
         if len(str(v)) > self.max_chars:
@@ -310,19 +338,39 @@ class SymbolicEvaluator:
                 raise NotRational
             if bv == 0 and (ex.is_Number and ex < 0):
                 raise NotEvaluable("division by zero")
-            v = self._small(bv**ex)
+            if not isinstance(ex, se.Integer) and bv != 0 and _certainly_negative(bv):
+                # symengine keeps (-8)**(1/3) as 2*(-1)**(1/3): complex, with no I
+                raise NotEvaluable(
+                    f"complex value {e} (a non-integer power of a negative number)")
+            v = self._real(e, self._small(bv**ex))
             d = self._small(ex * bv ** (ex - 1) * bd) if bd != 0 else zero
             return v, d
         args = [self.dual(a) for a in e.args]
+        if len(args) == 1 and type(e) in (se.asin, se.acos, se.acosh, se.atanh, se.log):
+            why = _outside_domain(type(e), _enclosure(args[0][0]))
+            if why is not None:
+                raise NotEvaluable(f"complex value {e} ({why})")
         x = [se.Symbol(f"_a{i}") for i in range(len(args))]
         f = type(e)(*x)
-        v = self._small(f.subs(dict(zip(x, [a for a, _ in args], strict=True))))
+        v = self._real(e, self._small(f.subs(dict(zip(x, [a for a, _ in args], strict=True)))))
         d = zero
         for xi, (_, ad) in zip(x, args, strict=True):
             if ad != 0:
                 df = f.diff(xi).subs(dict(zip(x, [a for a, _ in args], strict=True)))
                 d = d + df * ad
         return v, self._small(d)
+
+
+def _enclosure(v: se.Basic) -> arb:
+    """An enclosure of an exact constant (a NaN ball when it has none)."""
+    try:
+        return ball(v)
+    except NotEvaluable:
+        return arb("nan")
+
+
+def _certainly_negative(v: se.Basic) -> bool:
+    return bool(_enclosure(v) < 0)
 
 
 def _se(e: object) -> se.Basic:

@@ -56,6 +56,7 @@ __all__ = [
     "as_expr",
     "exact_decimals",
     "format_expression",
+    "negative_root",
     "parse_expression",
     "real_value",
 ]
@@ -329,7 +330,7 @@ class _Parser:
             stack.extend(part.args)
             if part in _UNDEFINED:
                 raise self.fail("undefined or infinite value", node)
-            if part is sp.I:
+            if part is sp.I or negative_root(part):
                 raise self.fail("complex value (expressions must be real)", node)
             if isinstance(part, sp.Float) and not math.isfinite(float(part)):
                 raise self.fail("number too large (outside the range of a double)", node)
@@ -340,6 +341,12 @@ class _Parser:
 
 
 _UNDEFINED = (sp.zoo, sp.nan, sp.oo, -sp.oo)
+
+
+def negative_root(part: sp.Basic) -> bool:
+    """A non-integer power of a negative number: ``(-8)**(1/3)`` is ``2*(-1)**(1/3)``, complex."""
+    return (isinstance(part, sp.Pow) and part.base.is_number and part.exp.is_number
+            and part.base.is_negative is True and part.exp.is_integer is False)
 
 
 def _max_paren_depth(text: str) -> int:

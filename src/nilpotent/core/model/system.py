@@ -22,7 +22,7 @@ from functools import cached_property
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr, negative_root
 from nilpotent.core.model.outline import Limits, Outline
 from nilpotent.errors import ModelError
 
@@ -115,6 +115,9 @@ class ControlSystem:
                 raise ModelError(
                     f"model {self.name!r}: geometry uses unknown names {', '.join(sorted(unknown))}"
                 )
+        _check_real(self.name, coords, flds, params)
+        if self.geometry is not None:
+            _check_real_geometry(self.name, coords, self.geometry, params)
         object.__setattr__(self, "coordinates", coords)
         object.__setattr__(self, "fields", flds)
         object.__setattr__(self, "parameters", params)
@@ -232,3 +235,70 @@ class ControlSystem:
 
     def _repr_html_(self) -> str:
         return typeset.system_display(self).html()
+
+
+def _check_real(
+    name: str,
+    coords: tuple[sp.Symbol, ...],
+    fields: tuple[tuple[Expr, ...], ...],
+    params: tuple[tuple[str, Expr], ...],
+) -> None:
+    """Refuse a field component that is not real at the real points of an open set.
+
+    With the coordinates read as real numbers and the parameters given their
+    values, sympy rewrites ``sqrt(-x**2)`` as ``I*Abs(x)`` and ``sqrt(-exp(x))``
+    as ``I*exp(x/2)``: a component containing the imaginary unit ``I`` (or a
+    non-integer power of a negative number, ``(-1)**(1/3)``) then is not real
+    wherever it is non-zero, and no computation could give it a real
+    value (a numeric one would silently drop the imaginary part).  Components
+    that are real on some open set and complex elsewhere (``sqrt(1 - x**2)``)
+    are kept: they evaluate to NaN outside their domain.
+    """
+    real: dict[sp.Basic, sp.Basic] = {c: sp.Dummy(str(c), real=True) for c in coords}
+    back = {d: c for c, d in real.items()}
+    real.update({sp.Symbol(k): v for k, v in params})
+    for i, f in enumerate(fields, start=1):
+        for c, e in zip(coords, f, strict=True):
+            seen = e if _imaginary(e) or not _may_turn_imaginary(e) else e.xreplace(real)
+            if _imaginary(seen):
+                shown = "" if seen is e else (
+                    " (" + str(seen.xreplace(back)) + " for real coordinates"
+                    + (" and the parameters' values" if params else "") + ")"
+                )
+                raise ModelError(
+                    f"model {name!r}: field X{i}[{c}] is not real: {e}{shown} holds the "
+                    "imaginary unit or a fractional power of a negative number (the square "
+                    "root of a negative quantity?)"
+                )
+
+
+def _may_turn_imaginary(e: sp.Basic) -> bool:
+    """Whether reading the symbols as real numbers may make sympy bring out an ``I``.
+
+    Only a power with a non-integer exponent (``sqrt(-x**2)`` → ``I*Abs(x)``) or a
+    logarithm can (the grammar's other functions are real on the reals); the
+    rewriting is skipped otherwise: it is the costly part of the check.
+    """
+    return e.has(sp.log) or any(p.exp.is_integer is not True for p in e.atoms(sp.Pow))
+
+
+def _imaginary(e: sp.Basic) -> bool:
+    """Whether ``e`` holds ``I`` or a non-integer power of a negative number (``(-1)**(1/3)``)."""
+    return any(part is sp.I or negative_root(part) for part in sp.preorder_traversal(e))
+
+
+def _check_real_geometry(
+    name: str, coords: tuple[sp.Symbol, ...], geometry: Outline,
+    params: tuple[tuple[str, Expr], ...],
+) -> None:
+    """Refuse an outline expression that is not real (as :func:`_check_real` for fields)."""
+    real: dict[sp.Basic, sp.Basic] = {c: sp.Dummy(str(c), real=True) for c in coords}
+    real.update({sp.Symbol(k): v for k, v in params})
+    for label, e in zip(geometry.labels(), geometry.expressions(), strict=True):
+        if _imaginary(e) or (_may_turn_imaginary(e)
+                             and _imaginary(as_expr(e).xreplace(real))):
+            raise ModelError(
+                f"model {name!r}: {label} = {e} is not real for real coordinates"
+                + (" and the parameters' values" if params else "")
+                + " (the square root or a fractional power of a negative quantity?)"
+            )
