@@ -115,8 +115,9 @@ def test_comparison_and_plan_reprs():
     cmp = nil.compare_bracket_motion(snake, (1, 2), 0.1)
     assert cmp._repr_latex_() == cmp.to_latex() and r"[X_{1}, X_{2}](p)" in cmp.to_latex()
     assert "<math" in cmp._repr_html_()
-    plan = nil.plan(snake, (0, 0, 0), (0.1, 0.05, 0.0))
-    tex = plan.to_latex()
-    assert tex == plan._repr_latex_() and "x_{\\mathrm{goal}}" in tex
-    page = plan._repr_html_()
-    assert "<math" in page and ("converged" in page)
+    for plan in (nil.steer(snake, (0, 0, 0), (0.1, 0.05, 0.0)),  # local steering: Plan
+                 nil.plan(snake, (0, 0, 0), (0.1, 0.05, 0.0))):  # as the command: GlobalPlan
+        tex = plan.to_latex()
+        assert tex == plan._repr_latex_() and "x_{\\mathrm{goal}}" in tex
+        page = plan._repr_html_()
+        assert "<math" in page and ("converged" in page)

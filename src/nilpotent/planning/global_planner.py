@@ -156,6 +156,17 @@ class GlobalPlan(PlanFigure):
     def error(self) -> float:
         return self.verification.error
 
+    # --- display in Jupyter: the whole plan's start, goal, point reached, iterations ---
+    def to_latex(self) -> str:
+        """:meth:`Plan.to_latex` of the whole plan (:attr:`plan`)."""
+        return self.plan.to_latex()
+
+    def _repr_latex_(self) -> str:
+        return self.to_latex()
+
+    def _repr_html_(self) -> str:
+        return self.plan._repr_html_()
+
     def to_json(self) -> dict[str, Any]:
         """``nilpotent/plan@1`` (INTERFACE.md) with ``world``, ``limits``, ``waypoints``,
         ``clearance``, ``limits_ok``, ``min_singular_margin`` and more; no NaN/Infinity
