@@ -167,6 +167,10 @@ class GlobalPlan:
         reasons: dict[str, str] = {}
         if v.clearance is None:
             reasons["clearance"] = "no world given: no obstacles to measure against"
+        if v.self_clearance is None:
+            reasons["self_clearance"] = (
+                f"model {self.plan.system.name} names no bodies that must not touch"
+            )
         if v.min_singular_margin is None:
             reasons["min_singular_margin"] = (
                 f"model {self.plan.system.name} defines no singular margin"
@@ -177,10 +181,14 @@ class GlobalPlan:
             "converged": bool(v.error <= self.plan.tol),
             "world": None if self.world is None else self.world.name,
             "limits": {k: [lo, hi] for k, (lo, hi) in self.limits.as_dict().items()},
+            "relative_limits": {k: [lo, hi]
+                                for k, (lo, hi) in self.limits.relative_dict().items()},
             "waypoints": [list(w) for w in self.waypoints],
             "clearance": v.clearance,
             "limits_ok": v.limits_ok,
             "limit_margin": v.limit_margin,
+            "self_clearance": v.self_clearance,
+            "self_collision_ok": v.self_collision_ok,
             "min_singular_margin": v.min_singular_margin,
             "singular_margin": self.singular_margin,
             "clearance_required": self.clearance_required,
@@ -585,8 +593,8 @@ def _plan_global(
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "
-                f"{v.clearance}, limit margin {v.limit_margin}, singular margin "
-                f"{v.min_singular_margin}); no plan returned"
+                f"{v.clearance}, limit margin {v.limit_margin}, self-clearance "
+                f"{v.self_clearance}, singular margin {v.min_singular_margin}); no plan returned"
             )
         if not v.error <= tol:
             raise PlanningError(
