@@ -46,7 +46,7 @@ drops there (consecutive bodies perpendicular are outside the regular set), so
 the steering's nilpotent approximation degrades near it.  1.4 rad keeps about
 10° (``cos 1.4 ≈ 0.17`` of the speed) from it; real tractor–trailer hitches
 stop at 60–90°.  Within it the rectangles of the default sizes cannot touch
-(they first meet at ``|θ_{i−1} − θ_i| ≈ 2.2`` rad, see the tests), so
+(they first meet at ``|θ_{i−1} − θ_i| ≈ 2.5`` rad, see the tests), so
 self-collision is a second guard (for ``--param d1=...`` shorter hitches and
 non-adjacent bodies).  No limits on the absolute angles.
 

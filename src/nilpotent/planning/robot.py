@@ -164,7 +164,7 @@ class Robot:
         # shapely's stubs take a scalar distance; dwithin is vectorised over it
         hit[~flat] = shapely.dwithin(  # pyright: ignore[reportCallIssue]
             ga[~flat], gb[~flat], reach[~flat])  # pyright: ignore[reportArgumentType]
-        return hit.any(axis=1)
+        return np.asarray(hit.any(axis=1), dtype=bool)
 
     @property
     def has_outline(self) -> bool:

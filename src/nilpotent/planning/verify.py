@@ -123,7 +123,9 @@ class Checker:
                 # two parts may approach each other: twice the cover of one part's motion
                 hit |= robot.self_collides(q[ok], parts, 2.0 * extra_clearance)
             if self.world is not None:
-                hit |= self.world.collides(*parts, self.clearance + extra_clearance).any(axis=1)
+                geoms, radii = parts
+                hit |= self.world.collides(geoms, radii,
+                                           self.clearance + extra_clearance).any(axis=1)
             ok[np.flatnonzero(ok)[hit]] = False
         return ok
 
