@@ -100,14 +100,16 @@ class Checker:
         return clear, lim, sing
 
     def valid(
-        self, q: np.ndarray, extra_clearance: float = 0.0, limit_slack: float = 0.0
+        self, q: np.ndarray, extra_clearance: float = 0.0, limit_slack: float = 0.0,
+        self_slack: float = 0.0,
     ) -> np.ndarray:
         """Boolean ``(N,)``: every limit holds, no contact, singular margin kept.
 
         The same verdict as :meth:`measures` (clearance ``> self.clearance``,
         limit margin ``≥ 0``, singular margin ``≥ self.singular_margin``), with
         shapely's predicates instead of distances (faster).  ``extra_clearance``
-        and ``limit_slack`` demand more (used to cover the motion between samples).
+        (obstacles), ``limit_slack`` (limits) and ``self_slack`` (distance between bodies
+        that must not touch) demand more (used to cover the motion between samples).
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
         ok = np.all(np.isfinite(q), axis=1)
@@ -120,8 +122,7 @@ class Checker:
             parts = robot.parts(q[ok])
             hit = np.zeros(parts[0].shape[0], dtype=bool)
             if selfish:
-                # two parts may approach each other: twice the cover of one part's motion
-                hit |= robot.self_collides(q[ok], parts, 2.0 * extra_clearance)
+                hit |= robot.self_collides(q[ok], parts, self_slack)
             if self.world is not None:
                 geoms, radii = parts
                 hit |= self.world.collides(geoms, radii,
@@ -137,8 +138,9 @@ class Checker:
     def valid_motion(self, states: np.ndarray) -> bool:
         """Every sample of a motion ``(N, n)`` admissible, with margins that cover the
         motion between consecutive samples: half the largest step of a limited
-        coordinate (limits), half the largest displacement of an outline point
-        (clearance).  Exact for straight motion between samples, a first-order
+        coordinate or relative-limit expression (limits), half the largest displacement
+        of an outline point (clearance), the whole of it (self-collision: two parts may
+        approach each other).  Exact for straight motion between samples, a first-order
         cover otherwise; the whole plan is re-verified more densely anyway.
         """
         q = np.atleast_2d(np.asarray(states, dtype=float))
@@ -161,7 +163,8 @@ class Checker:
                     (float(np.linalg.norm(m, axis=-1).max()) for m in moved if m.size),
                     default=0.0,
                 )
-        return bool(np.all(self.valid(q, extra, slack)))
+        # two parts may approach each other: twice the cover of one part's motion
+        return bool(np.all(self.valid(q, extra, slack, 2.0 * extra)))
 
     def why_invalid(self, q: Sequence[float] | State) -> str:
         """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""
