@@ -16,8 +16,13 @@ the interior angle of the body at a vertex (``π/3``) is the cone of leg
 directions ``|φ_i| > 5π/6`` (mod ``2π``), and a leg stays outside the body
 (touching an edge at most) iff ``φ_i ∈ [−5π/6, 5π/6]``.  These are the default
 ``[limits]`` of the three forms; they also keep a joint from turning through
-the body (the joint coordinate is not wrapped).  Legs may still cross one
-another (self-collision of legs is not checked).
+the body (the joint coordinate is not wrapped).  The body is convex, so a leg
+leaving a vertex outside the interior cone meets the body only at that vertex:
+the limits are exactly "no leg in the body".  *Self-collision:* the outline's
+bodies are ``body`` (the triangle) and ``leg1..leg3`` (leg ``i``: its segment and
+its wheel); the legs must not touch one another (``self_collision``: every pair
+of legs).  A leg always touches the body at its own vertex, so leg–body is the
+joint limits' job, not a self-collision pair.
 
 **Car with trailers** (``car-trailers:K``, coordinates ``x, y, θ0..θK``,
 hitch lengths ``d_i``).  Axle centres ``P_0 = (x, y)``,
@@ -25,8 +30,25 @@ hitch lengths ``d_i``).  Axle centres ``P_0 = (x, y)``,
 0.1 behind to 0.7 ahead of ``P_0`` along ``θ0``, 0.5 wide; trailer ``i`` the
 rectangle from 0.2 behind to 0.3 ahead of ``P_i`` along ``θ_i``, 0.4 wide
 (model length units, independent of ``d_i``); each hitch is the segment
-``P_i → P_{i−1}``.  No joint limits by default (relative angles are not
-coordinates; add ``--limit`` on any ``θ_i`` if needed).
+``P_i → P_{i−1}``.
+
+*Self-collision* (bodies ``car``, ``trailer1..K``, ``hitch1..K``): the car against
+every trailer, every two trailers, and each hitch bar against every body except
+the two it joins (hitch ``i`` joins vehicle ``i−1`` and trailer ``i``; it touches
+them at the axle centres by construction) and against every hitch bar but its
+neighbours (consecutive bars share an axle centre).
+
+*Hitch limits* (``relative_limits``): ``|θ_{i−1} − θ_i| ≤`` :data:`HITCH_LIMIT`
+``= 1.4`` rad (≈ 80.2°).  At ``|θ_{i−1} − θ_i| = π/2`` the trailer's speed
+``v_i = v_{i−1} cos(θ_{i−1} − θ_i)`` vanishes — the jackknife: driving the car
+forward no longer moves the trailer, only turns it — and the growth vector
+drops there (consecutive bodies perpendicular are outside the regular set), so
+the steering's nilpotent approximation degrades near it.  1.4 rad keeps about
+10° (``cos 1.4 ≈ 0.17`` of the speed) from it; real tractor–trailer hitches
+stop at 60–90°.  Within it the rectangles of the default sizes cannot touch
+(they first meet at ``|θ_{i−1} − θ_i| ≈ 2.5`` rad, see the tests), so
+self-collision is a second guard (for ``--param d1=...`` shorter hitches and
+non-adjacent bodies).  No limits on the absolute angles.
 
 **Car** (``car``): :func:`~nilpotent.models.vehicles.car_outline`; default
 limit ``|φ| ≤ atan(L / rmin)`` from the model's own parameter values.
@@ -51,15 +73,19 @@ from nilpotent.models.vehicles import (
 
 __all__ = [
     "CAR_SIZE",
+    "HITCH_LIMIT",
     "LEG_LIMIT",
     "TRAILER_SIZE",
     "car_trailers_outline",
+    "hitch_limits",
     "trident_outline",
     "with_builtin_constraints",
 ]
 
 #: The bound of the trident snake's default joint limits ``|φ_i| ≤ 5π/6`` (see module doc).
 LEG_LIMIT = 5 * sp.pi / 6
+#: The hitch limits of ``car-trailers:K``: ``|θ_{i−1} − θ_i| ≤ 1.4`` rad (module doc).
+HITCH_LIMIT = 1.4
 #: Car rectangle: (behind the axle, ahead of the axle, width).
 CAR_SIZE = (sp.Rational(1, 10), sp.Rational(7, 10), sp.Rational(1, 2))
 #: Trailer rectangle: (behind the axle, ahead of the axle, width).
@@ -86,10 +112,13 @@ def trident_outline(
         (vx + l * sp.cos(th + a + p), vy + l * sp.sin(th + a + p))
         for (vx, vy), a, p in zip(verts, offsets, phis, strict=True)
     ]
+    legs = tuple(f"leg{i}" for i in range(1, len(verts) + 1))
     return Outline(
         polygons=(tuple(verts),),
         segments=tuple(zip(verts, wheels, strict=True)),
         discs=tuple((w, sp.Integer(0)) for w in wheels),
+        bodies=("body", *legs, *legs),
+        self_collision=tuple((a, b) for i, a in enumerate(legs) for b in legs[i + 1:]),
     )
 
 
@@ -114,7 +143,24 @@ def car_trailers_outline(coords: tuple[sp.Symbol, ...]) -> Outline:
     polys += [_rectangle(px, py, th, *TRAILER_SIZE)
               for (px, py), th in zip(axles[1:], thetas[1:], strict=True)]
     hitches = tuple((axles[i], axles[i - 1]) for i in range(1, len(axles)))
-    return Outline(polygons=tuple(polys), segments=hitches)
+    k = len(hitches)
+    vehicles = ["car", *(f"trailer{i}" for i in range(1, k + 1))]
+    bars = [f"hitch{i}" for i in range(1, k + 1)]
+    pairs = [(a, b) for i, a in enumerate(vehicles) for b in vehicles[i + 1:]]
+    for i in range(1, k + 1):  # hitch i joins vehicles[i - 1] and vehicles[i]
+        pairs += [(bars[i - 1], v) for j, v in enumerate(vehicles) if j not in (i - 1, i)]
+        pairs += [(bars[i - 1], bars[j - 1]) for j in range(i + 2, k + 1)]
+    return Outline(polygons=tuple(polys), segments=hitches, bodies=(*vehicles, *bars),
+                   self_collision=tuple(pairs))
+
+
+def hitch_limits(k: int) -> tuple[tuple[str, sp.Expr, float, float], ...]:
+    """The relative limits ``|θ_{i−1} − θ_i| ≤`` :data:`HITCH_LIMIT` of ``car-trailers:k``."""
+    out = []
+    for i in range(1, k + 1):
+        a, b = sp.Symbol(f"theta{i - 1}"), sp.Symbol(f"theta{i}")
+        out.append((f"theta{i - 1} - theta{i}", a - b, -HITCH_LIMIT, HITCH_LIMIT))
+    return tuple(out)
 
 
 def with_builtin_constraints(system: ControlSystem) -> ControlSystem:
@@ -139,7 +185,8 @@ def with_builtin_constraints(system: ControlSystem) -> ControlSystem:
             coords, _TRIDENT_ANGLES[key], "r" in system.parameter_values
         ))
     if name.startswith("car-trailers:"):
-        return replace(system, geometry=car_trailers_outline(coords))
+        limits = Limits(system.limits.bounds, hitch_limits(len(coords) - 3))
+        return replace(system, limits=limits, geometry=car_trailers_outline(coords))
     if name == "car":
         values = system.parameter_values
         bound = float(sp.atan(values["L"] / values["rmin"]))

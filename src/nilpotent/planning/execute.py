@@ -15,8 +15,16 @@ re-plan"):
    the measured error is at most ``tol`` or ``max_corrections`` rounds.
 
 The motion of the true robot (its own outline, with the true parameters) is
-checked at dense samples; every violation (limits, contact, singular margin)
-is reported.  The open-loop result — the plan's controls applied unchanged to
+checked at dense samples; every violation (limits, relative limits, contact,
+self-collision, singular margin) is reported.  *Safety stop:* the executor never
+drives the true robot outside them — before a sample of the true motion would be
+inadmissible (the true robot's checker: limits, relative limits, obstacles,
+self-collision, singular margin), the robot stops at the last admissible sample
+(an ideal safety monitor on the true state), the controls applied so far are cut
+there (``safety_stops`` counts the stops), and it re-plans from the measured state
+toward the goal (as a correction).  So the closed-loop motion is admissible at
+every sample; a robot stopped short of the goal reports ``success: false``.
+The open-loop result — the plan's controls applied unchanged to
 the true robot — is computed too, for comparison.
 
 Everything runs within one time limit (:mod:`nilpotent.planning.budget`): when it
@@ -104,6 +112,9 @@ class Execution:
         The execution's settings.
     stopped_by_time_limit:
         The corrections stopped because the time limit ran out.
+    safety_stops:
+        How many times the true robot was stopped before leaving the admissible set
+        (module doc).
     """
 
     plan: GlobalPlan
@@ -119,6 +130,7 @@ class Execution:
     tol: float
     segments: tuple[Segment, ...] = ()
     stopped_by_time_limit: bool = False
+    safety_stops: int = 0
 
     @property
     def reached(self) -> bool:
@@ -129,6 +141,8 @@ class Execution:
         def block(v: Verification, violations: tuple[str, ...]) -> dict[str, Any]:
             return {"reached": list(v.reached), "error": v.error, "clearance": v.clearance,
                     "limits_ok": v.limits_ok, "limit_margin": v.limit_margin,
+                    "self_clearance": v.self_clearance,
+                    "self_collision_ok": v.self_collision_ok,
                     "min_singular_margin": v.min_singular_margin,
                     "violations": list(violations)}
 
@@ -145,6 +159,7 @@ class Execution:
             "tol": self.tol,
             "success": self.reached,
             "stopped_by_time_limit": self.stopped_by_time_limit,
+            "safety_stops": self.safety_stops,
             "closed_loop": {**block(self.closed_loop, self.violations),
                             "measured_error": self.measured_error, "replans": self.replans,
                             "segments": [s.to_dict() for s in self.segments]},
@@ -161,6 +176,10 @@ def _violations(checker: Checker, states: np.ndarray) -> tuple[str, ...]:
                    f"sample {k})")
     if np.any(lim < 0):
         out.append(f"limits exceeded by up to {-lim.min():.3g}")
+    self_clear = checker.self_clearance(states)
+    if np.any(~(self_clear > 0)):
+        k = int(np.argmin(self_clear))
+        out.append(f"self-collision (two bodies that must not touch meet at sample {k})")
     if checker.margin_fn is not None and np.any(sing < checker.singular_margin):  # type: ignore[attr-defined]
         out.append(f"singular margin down to {sing.min():.3g} < {checker.singular_margin:g}")
     return tuple(out)
@@ -260,30 +279,46 @@ def _execute(
     t_offset = 0.0
     applied: list[Segment] = []
     replans = 0
+    stops = 0
 
-    def apply(segs: list[Segment]) -> None:
-        nonlocal x, x_meas, t_offset
+    def apply(segs: list[Segment]) -> bool:
+        """Drive the true robot; False: a safety stop cut the motion (module doc)."""
+        nonlocal x, x_meas, t_offset, stops
         if not segs:
-            return
+            return True
         t, q = simulate_path(true, x, segs, SAMPLES, hard=True)
+        bad = np.flatnonzero(~actual.valid(q))
+        whole = not bad.size
+        if not whole:
+            last = max(int(bad[0]) - 1, 0)  # the last admissible sample (0: where it stood)
+            t, q = t[: last + 1], q[: last + 1]
+            segs = _cut(segs, float(t[-1]))
+            stops += 1
         states.append(q[1:])
         times.append(t[1:] + t_offset)
         t_offset += float(t[-1])
         x = q[-1]
         x_meas = measure(x)
         applied.extend(segs)
+        return whole
 
+    corrections = max_corrections
     for k, piece in enumerate(glob.pieces):
         final = k == len(glob.pieces) - 1
         target = np.array(piece.target)
-        apply(controls(x_meas, target, glob.plan.tol if final else MID_TOL))
         replans += 1
+        if not apply(controls(x_meas, target, glob.plan.tol if final else MID_TOL)):
+            break  # stopped: re-plan from where it stands toward the goal
     stopped = False
-    for _ in range(max_corrections):
+    for _ in range(corrections):
         if float(np.linalg.norm(x_meas - goal)) <= tol:
             break
         try:
             apply(controls(x_meas, goal, min(glob.plan.tol, tol / 10)))
+        except PlanningError:
+            if not stops:
+                raise
+            break  # after a safety stop, no admissible re-plan: it stays (success false)
         except ComputationLimitError:
             stopped = True  # the robot stays where it is: the result says so
             break
@@ -297,5 +332,22 @@ def _execute(
         violations=_violations(actual, closed.states),
         open_loop_violations=_violations(actual, q_open),
         mismatch=mismatch, noise=noise, seed=seed, tol=tol, segments=tuple(applied),
-        stopped_by_time_limit=stopped,
+        stopped_by_time_limit=stopped, safety_stops=stops,
     )
+
+
+def _cut(segments: list[Segment], until: float) -> list[Segment]:
+    """The controls ``segments`` up to time ``until`` (the last one shortened; a segment's
+    inputs are functions of the time since its start, so a prefix is the same motion)."""
+    from dataclasses import replace
+
+    out: list[Segment] = []
+    start = 0.0
+    for seg in segments:
+        if start + seg.duration >= until:
+            if until > start:
+                out.append(replace(seg, duration=until - start))
+            break
+        out.append(seg)
+        start += seg.duration
+    return out

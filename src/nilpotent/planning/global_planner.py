@@ -176,20 +176,20 @@ class GlobalPlan(PlanFigure):
         reasons: dict[str, str] = dict(self.plan.length_fields[1])
         if v.clearance is None:
             reasons["clearance"] = "no world given: no obstacles to measure against"
+        if v.self_clearance is None:
+            reasons["self_clearance"] = f"model {self.plan.system.name} names no body pairs"
         if v.min_singular_margin is None:
-            reasons["min_singular_margin"] = (
-                f"model {self.plan.system.name} defines no singular margin"
-            )
+            reasons["min_singular_margin"] = f"model {self.plan.system.name} defines no " \
+                "singular margin"
         out.update({
-            "reached": list(v.reached),
-            "error": v.error,
+            "reached": list(v.reached), "error": v.error,
             "converged": bool(v.error <= self.plan.tol),
             "world": None if self.world is None else self.world.name,
             "limits": {k: [lo, hi] for k, (lo, hi) in self.limits.as_dict().items()},
+            "relative_limits": {k: list(b) for k, b in self.limits.relative_dict().items()},
             "waypoints": [list(w) for w in self.waypoints],
-            "clearance": v.clearance,
-            "limits_ok": v.limits_ok,
-            "limit_margin": v.limit_margin,
+            "clearance": v.clearance, "limits_ok": v.limits_ok, "limit_margin": v.limit_margin,
+            "self_clearance": v.self_clearance, "self_collision_ok": v.self_collision_ok,
             "min_singular_margin": v.min_singular_margin,
             "singular_margin": self.singular_margin,
             "clearance_required": self.clearance_required,
@@ -493,8 +493,8 @@ def _plan_global(
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "
-                f"{v.clearance}, limit margin {v.limit_margin}, singular margin "
-                f"{v.min_singular_margin}); no plan returned"
+                f"{v.clearance}, limit margin {v.limit_margin}, self-clearance "
+                f"{v.self_clearance}, singular margin {v.min_singular_margin}); no plan returned"
             )
         if not v.error <= tol:
             raise PlanningError(

@@ -8,8 +8,12 @@ the safe grammar or the built-ins) and turns arrays of configurations
 configuration.  Discs are kept as their centre points plus a radius (the
 exact distance to a disc is the distance to its centre minus the radius).
 
-It also evaluates the box limits (:meth:`Robot.limit_margin`: the signed
-distance to the nearest bound, negative outside) and, for models that have
+It also evaluates the limits (:meth:`Robot.limit_margin`: the signed
+distance to the nearest bound of the box limits and of the relative limits
+``lo ≤ g(q) ≤ hi``, negative outside), self-collision
+(:meth:`Robot.self_collides`, :meth:`Robot.self_clearance`: the outline's pairs
+of bodies that must not touch, one vectorised shapely call per pair of parts)
+and, for models that have
 one, the singular margin (:func:`singular_margin_function`:
 ``|det M(q)|`` of ``trident-snake-joints``, the matrix of the no-slip
 constraints solved for the body velocity; 0 on the singular set).
@@ -105,10 +109,70 @@ class Robot:
                                                           dtype=int))
         object.__setattr__(self, "_limit_lo", np.array([lo for _, lo, _ in bounds], dtype=float))
         object.__setattr__(self, "_limit_hi", np.array([hi for _, _, hi in bounds], dtype=float))
+        rel = self.limits.relative
+        object.__setattr__(self, "_rel_fn", sp.lambdify(
+            [self.system.coordinates], [as_expr(e) for _, e, _, _ in rel], "numpy")
+            if rel else None)
+        object.__setattr__(self, "_rel_lo", np.array([lo for _, _, lo, _ in rel], dtype=float))
+        object.__setattr__(self, "_rel_hi", np.array([hi for _, _, _, hi in rel], dtype=float))
+        pairs = outline.self_collision_parts() if outline is not None else ()
+        object.__setattr__(self, "_pairs", np.array(pairs, dtype=int).reshape(-1, 2))
 
     @property
     def outline(self) -> Outline | None:
         return self.system.geometry
+
+    @property
+    def has_self_collision(self) -> bool:
+        """The outline names pairs of bodies that must not touch."""
+        return bool(self._pairs.size)  # type: ignore[attr-defined]
+
+    def relative_values(self, q: np.ndarray) -> np.ndarray:
+        """The relative-limit expressions at ``q (N, n)``: shape ``(N, R)``."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        fn = self._rel_fn  # type: ignore[attr-defined]
+        if fn is None:
+            return np.zeros((q.shape[0], 0))
+        with np.errstate(all="ignore"):
+            vals = fn(q.T)
+        out = np.empty((q.shape[0], len(vals)))
+        for i, v in enumerate(vals):
+            out[:, i] = v
+        return out
+
+    def self_clearance(self, q: np.ndarray, parts: tuple[np.ndarray, np.ndarray] | None = None
+                       ) -> np.ndarray:
+        """Smallest distance between two parts that must not touch, minus their radii, ``(N,)``
+        (``≤ 0``: self-collision); ``+inf`` where the outline names no such pair."""
+        pairs = self._pairs  # type: ignore[attr-defined]
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        if not pairs.size:
+            return np.full(q.shape[0], np.inf)
+        geoms, radii = self.parts(q) if parts is None else parts
+        a, b = pairs[:, 0], pairs[:, 1]
+        d = shapely.distance(geoms[:, a], geoms[:, b]) - radii[:, a] - radii[:, b]
+        return d.min(axis=1)
+
+    def self_collides(self, q: np.ndarray, parts: tuple[np.ndarray, np.ndarray] | None = None,
+                      margin: float = 0.0) -> np.ndarray:
+        """Boolean ``(N,)``: two parts that must not touch are closer than ``margin`` (or touch,
+        or overlap): :meth:`self_clearance` ``≤ margin``, by shapely's predicates
+        (``intersects`` where the distance allowed is 0, ``dwithin`` elsewhere)."""
+        pairs = self._pairs  # type: ignore[attr-defined]
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        if not pairs.size:
+            return np.zeros(q.shape[0], dtype=bool)
+        geoms, radii = self.parts(q) if parts is None else parts
+        a, b = pairs[:, 0], pairs[:, 1]
+        ga, gb = geoms[:, a], geoms[:, b]
+        reach = radii[:, a] + radii[:, b] + margin
+        hit = np.zeros(ga.shape, dtype=bool)
+        flat = reach <= 0
+        hit[flat] = shapely.intersects(ga[flat], gb[flat])
+        # shapely's stubs take a scalar distance; dwithin is vectorised over it
+        hit[~flat] = shapely.dwithin(  # pyright: ignore[reportCallIssue]
+            ga[~flat], gb[~flat], reach[~flat])  # pyright: ignore[reportArgumentType]
+        return np.asarray(hit.any(axis=1), dtype=bool)
 
     @property
     def has_outline(self) -> bool:
@@ -229,13 +293,20 @@ class Robot:
                 "radii": disc[..., 2]}
 
     def limit_margin(self, q: np.ndarray) -> np.ndarray:
-        """``min_j min(x_j − lo_j, hi_j − x_j)`` over the limited coordinates, ``(N,)``.
+        """``min_j min(x_j − lo_j, hi_j − x_j)`` over the limited coordinates and the
+        relative limits (``x_j`` then the expression's value), ``(N,)``.
 
-        Non-negative iff every limit holds; ``+inf`` where there are no limits.
+        Non-negative iff every limit holds; ``+inf`` where there are no limits; NaN (an
+        expression not defined there) counts as outside (``-inf``).
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
+        out = np.full(q.shape[0], np.inf)
         idx = self._limit_index  # type: ignore[attr-defined]
-        if idx.size == 0:
-            return np.full(q.shape[0], np.inf)
-        x = q[:, idx]
-        return np.minimum(x - self._limit_lo, self._limit_hi - x).min(axis=1)  # type: ignore[attr-defined]
+        if idx.size:
+            x = q[:, idx]
+            out = np.minimum(x - self._limit_lo, self._limit_hi - x).min(axis=1)  # type: ignore[attr-defined]
+        if self._rel_fn is not None:  # type: ignore[attr-defined]
+            g = self.relative_values(q)
+            m = np.minimum(g - self._rel_lo, self._rel_hi - g).min(axis=1)  # type: ignore[attr-defined]
+            out = np.minimum(out, np.where(np.isnan(m), -np.inf, m))
+        return out

@@ -1,4 +1,5 @@
-"""Is a configuration, or a re-simulated motion, admissible: limits, collisions, singular margin.
+"""Is a configuration, or a re-simulated motion, admissible: limits, collisions, self-collision,
+singular margin.
 
 :class:`Checker` bundles what a plan must respect — the box limits, the
 world's obstacles and bounds (through the robot's outline), and a margin from
@@ -7,7 +8,7 @@ configurations ``(N, n)`` (vectorised: one shapely call per batch).
 
 :func:`verify_segments` re-simulates controls on the true system densely and
 measures the motion: minimum clearance to the obstacles, minimum limit margin,
-minimum singular margin, final error.  Every plan the global planner returns
+minimum self-clearance, minimum singular margin, final error.  Every plan the global planner returns
 is checked this way.
 """
 
@@ -18,6 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 
 from nilpotent.core.model.outline import Limits
 from nilpotent.core.model.system import ControlSystem
@@ -98,31 +100,47 @@ class Checker:
         return clear, lim, sing
 
     def valid(
-        self, q: np.ndarray, extra_clearance: float = 0.0, limit_slack: float = 0.0
+        self, q: np.ndarray, extra_clearance: float = 0.0, limit_slack: float = 0.0,
+        self_slack: float = 0.0,
     ) -> np.ndarray:
         """Boolean ``(N,)``: every limit holds, no contact, singular margin kept.
 
         The same verdict as :meth:`measures` (clearance ``> self.clearance``,
         limit margin ``≥ 0``, singular margin ``≥ self.singular_margin``), with
         shapely's predicates instead of distances (faster).  ``extra_clearance``
-        and ``limit_slack`` demand more (used to cover the motion between samples).
+        (obstacles), ``limit_slack`` (limits) and ``self_slack`` (distance between bodies
+        that must not touch) demand more (used to cover the motion between samples).
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
         ok = np.all(np.isfinite(q), axis=1)
         ok &= self.robot.limit_margin(q) >= limit_slack  # type: ignore[attr-defined]
         if self.margin_fn is not None:  # type: ignore[attr-defined]
             ok &= self.margin_fn(q) >= self.singular_margin  # type: ignore[attr-defined]
-        if self.world is not None and ok.any():
-            geoms, radii = self.robot.parts(q[ok])  # type: ignore[attr-defined]
-            hit = self.world.collides(geoms, radii, self.clearance + extra_clearance).any(axis=1)
+        robot: Robot = self.robot  # type: ignore[attr-defined]
+        selfish = robot.has_self_collision
+        if (self.world is not None or selfish) and ok.any():
+            parts = robot.parts(q[ok])
+            hit = np.zeros(parts[0].shape[0], dtype=bool)
+            if selfish:
+                hit |= robot.self_collides(q[ok], parts, self_slack)
+            if self.world is not None:
+                geoms, radii = parts
+                hit |= self.world.collides(geoms, radii,
+                                           self.clearance + extra_clearance).any(axis=1)
             ok[np.flatnonzero(ok)[hit]] = False
         return ok
+
+    def self_clearance(self, q: np.ndarray) -> np.ndarray:
+        """Smallest distance between two parts that must not touch, ``(N,)`` (``≤ 0``:
+        self-collision; ``+inf`` where the model names no such pair)."""
+        return self.robot.self_clearance(q)  # type: ignore[attr-defined]
 
     def valid_motion(self, states: np.ndarray) -> bool:
         """Every sample of a motion ``(N, n)`` admissible, with margins that cover the
         motion between consecutive samples: half the largest step of a limited
-        coordinate (limits), half the largest displacement of an outline point
-        (clearance).  Exact for straight motion between samples, a first-order
+        coordinate or relative-limit expression (limits), half the largest displacement
+        of an outline point (clearance), the whole of it (self-collision: two parts may
+        approach each other).  Exact for straight motion between samples, a first-order
         cover otherwise; the whole plan is re-verified more densely anyway.
         """
         q = np.atleast_2d(np.asarray(states, dtype=float))
@@ -133,7 +151,11 @@ class Checker:
             cols = [names.index(k) for k, _, _ in self.limits.bounds]
             if cols:
                 slack = 0.5 * float(np.abs(np.diff(q[:, cols], axis=0)).max())
-            if self.world is not None:
+            if self.limits.relative:
+                g = self.robot.relative_values(q)  # type: ignore[attr-defined]
+                slack = max(slack, 0.5 * float(np.nan_to_num(
+                    np.abs(np.diff(g, axis=0)), nan=np.inf).max()))
+            if self.world is not None or self.robot.has_self_collision:  # type: ignore[attr-defined]
                 pts = self.robot.points(q)  # type: ignore[attr-defined]
                 moved = [np.diff(p, axis=0) for p in pts["polygons"]]
                 moved += [np.diff(pts["segments"], axis=0), np.diff(pts["discs"], axis=0)]
@@ -141,7 +163,8 @@ class Checker:
                     (float(np.linalg.norm(m, axis=-1).max()) for m in moved if m.size),
                     default=0.0,
                 )
-        return bool(np.all(self.valid(q, extra, slack)))
+        # two parts may approach each other: twice the cover of one part's motion
+        return bool(np.all(self.valid(q, extra, slack, 2.0 * extra)))
 
     def why_invalid(self, q: Sequence[float] | State) -> str:
         """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""
@@ -155,10 +178,32 @@ class Checker:
             bad = [f"{k} = {q[names.index(k)]:.4g} outside [{lo:.4g}, {hi:.4g}]"
                    for k, lo, hi in self.limits.bounds
                    if not lo <= q[names.index(k)] <= hi]
+            g = self.robot.relative_values(np.asarray(q, dtype=float)[None, :])[0]  # type: ignore[attr-defined]
+            bad += [f"{label} = {v:.4g} outside [{lo:.4g}, {hi:.4g}]"
+                    for (label, _, lo, hi), v in zip(self.limits.relative, g, strict=True)
+                    if not lo <= v <= hi]
             reasons.append("limits violated: " + ", ".join(bad))
+        self_clear = float(self.self_clearance(np.asarray(q, dtype=float)[None, :])[0])
+        if not self_clear > 0:
+            reasons.append(f"it collides with itself ({self._self_pair(q)}; self-clearance "
+                           f"{self_clear:.3g})")
         if self.margin_fn is not None and sing < self.singular_margin:  # type: ignore[attr-defined]
             reasons.append(f"singular margin {sing:.3g} below {self.singular_margin:g}")
         return "; ".join(reasons)
+
+    def _self_pair(self, q: Sequence[float] | State) -> str:
+        """The first pair of bodies in contact at ``q``, in words."""
+        robot: Robot = self.robot  # type: ignore[attr-defined]
+        outline = robot.outline
+        assert outline is not None
+        geoms, radii = robot.parts(np.asarray(q, dtype=float)[None, :])
+        for a, b in outline.self_collision:
+            for i, j in outline.self_collision_parts():
+                if outline.bodies[i] == a and outline.bodies[j] == b:
+                    d = float(shapely.distance(geoms[0, i], geoms[0, j]))
+                    if not d - radii[0, i] - radii[0, j] > 0:
+                        return f"{a} touches {b}"
+        return "two bodies touch"
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,6 +228,11 @@ class Verification:
         Every sample admissible for the checker.
     reached, error:
         Last state and its distance to the goal.
+    self_clearance:
+        Minimum distance between two bodies that must not touch (``≤ 0``: a
+        self-collision); ``None`` where the model names no such pair.
+    self_collision_ok:
+        No sample collides with itself.
     """
 
     times: np.ndarray
@@ -194,6 +244,8 @@ class Verification:
     admissible: bool
     reached: tuple[float, ...]
     error: float
+    self_clearance: float | None = None
+    self_collision_ok: bool = True
 
 
 def verify_states(
@@ -202,6 +254,8 @@ def verify_states(
     """Measure sampled states ``(N, n)`` against ``checker`` (see :class:`Verification`)."""
     clear, lim, sing = checker.measures(states)
     ok = checker.valid(states)
+    selfish = checker.robot.has_self_collision  # type: ignore[attr-defined]
+    self_clear = checker.self_clearance(states) if selfish else None
     limits = checker.limits
     assert limits is not None
     return Verification(
@@ -215,6 +269,8 @@ def verify_states(
         admissible=bool(np.all(ok)),
         reached=tuple(float(v) for v in states[-1]),
         error=float(np.linalg.norm(states[-1] - np.asarray(goal, dtype=float))),
+        self_clearance=float(self_clear.min()) if self_clear is not None else None,
+        self_collision_ok=bool(self_clear is None or np.all(self_clear > 0)),
     )
 
 

@@ -67,6 +67,7 @@ __all__ = [
     "limits_from_dict",
     "load_model_file",
     "outline_from_dict",
+    "relative_limits_from_dict",
     "system_from_dict",
     "system_to_dict",
 ]
@@ -74,6 +75,7 @@ __all__ = [
 #: Top-level keys of a model file.
 ALLOWED_KEYS: tuple[str, ...] = (
     "name", "description", "coordinates", "parameters", "fields", "limits", "geometry",
+    "relative_limits",
 )
 #: Most coordinates of a model file.
 MAX_COORDINATES = 40
@@ -328,6 +330,9 @@ def system_from_dict(
             )
         fields.append(tuple(components[c] for c in coord_names))
     limits = limits_from_dict(data.get("limits", {}), coord_names, source)
+    if "relative_limits" in data:
+        limits = Limits(limits.bounds, relative_limits_from_dict(
+            data["relative_limits"], {c: names[c] for c in coord_names}, source))
     geometry = outline_from_dict(data["geometry"], names, source) if "geometry" in data else None
     try:
         return ControlSystem(
@@ -363,6 +368,76 @@ def limits_from_dict(raw: object, coord_names: list[str], source: str) -> Limits
     return Limits(tuple(bounds))
 
 
+def relative_limits_from_dict(
+    raw: object, coords: Mapping[str, sp.Symbol], source: str
+) -> tuple[tuple[str, sp.Expr, float, float], ...]:
+    """The ``[relative_limits]`` table: ``"EXPRESSION" = [lo, hi]``, e.g.
+    ``"theta0 - theta1" = [-1.4, 1.4]`` (a hitch angle).
+
+    The key is an expression of the safe grammar in the coordinates only (not the
+    parameters: a limit stays the same when ``--param`` changes them); the bounds are
+    numbers or constant expressions.
+
+    Raises
+    ------
+    ModelError
+        Not a table, an empty key, a key that names no coordinate, not a pair, ``lo > hi``,
+        a bound that is not finite, the same expression twice.
+    ExpressionError
+        A key outside the grammar or naming something that is not a coordinate.
+    """
+    if not isinstance(raw, Mapping):
+        raise ModelError(f"{source}: relative_limits must be a table of \"EXPRESSION\" = "
+                         f"[lo, hi] (e.g. \"theta0 - theta1\" = [-1.4, 1.4]), got {_show(raw)}")
+    out = []
+    seen: dict[sp.Expr, str] = {}
+    for key, pair in raw.items():
+        where = f"{source}: relative_limits.{_show(key)}"
+        if not isinstance(key, str) or not key.strip():
+            raise ModelError(f"{where}: the key must be an expression of the coordinates")
+        expr = parse_expression(key, coords, where=where)
+        if not expr.free_symbols:
+            raise ModelError(f"{where}: {key!r} is a constant; a relative limit is an "
+                             f"expression of the coordinates ({', '.join(coords)})")
+        if expr in seen:
+            raise ModelError(f"{where}: the same expression as relative_limits."
+                             f"{_show(seen[expr])}")
+        seen[expr] = key
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise ModelError(f"{where}: a limit is a pair [lo, hi], got {_show(pair)}")
+        lo, hi = (real_value(_parameter_value(v, where), where=where) for v in pair)
+        if lo > hi:
+            raise ModelError(f"{where}: lower bound {lo} is above the upper bound {hi}")
+        out.append((key, expr, lo, hi))
+    return tuple(out)
+
+
+def _body_name(value: object, where: str) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise ModelError(f"{where}: a body name is a non-empty string, got {_show(value)}")
+    if len(value) > MAX_NAME_LENGTH:
+        raise ModelError(f"{where}: body name of {len(value):,} characters, above the limit "
+                         f"{MAX_NAME_LENGTH}")
+    return value
+
+
+def _self_collision(raw: object, bodies: list[str | None], source: str) -> tuple:
+    where = f"{source}: geometry.self_collision"
+    known = list(dict.fromkeys(b for b in bodies if b is not None))
+    if raw == "all":
+        return tuple((a, b) for i, a in enumerate(known) for b in known[i + 1:])
+    if not isinstance(raw, list):
+        raise ModelError(f"{where}: a list of body pairs [[\"A\", \"B\"], ...] or \"all\" "
+                         f"(every pair of distinct bodies), got {_show(raw)}")
+    out = []
+    for i, pair in enumerate(raw):
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise ModelError(f"{where}[{i}]: a pair of body names [\"A\", \"B\"], "
+                             f"got {_show(pair)}")
+        out.append(tuple(_body_name(b, f"{where}[{i}]") for b in pair))
+    return tuple(out)
+
+
 def _outline_point(raw: object, names: Mapping[str, sp.Symbol], where: str) -> tuple:
     if not isinstance(raw, list) or len(raw) != 2:
         raise ModelError(f"{where}: a point is a pair [X, Y] of expressions, got {_show(raw)}")
@@ -386,11 +461,13 @@ def outline_from_dict(raw: object, names: Mapping[str, sp.Symbol], source: str) 
     if not isinstance(raw, Mapping):
         raise ModelError(f"{source}: geometry must be a table with {', '.join(kinds)}")
     for key in raw:
-        if key not in kinds:
+        if key not in (*kinds, "self_collision"):
             raise ModelError(
-                f"{source}: geometry: unknown key {_show(key)} (allowed: {', '.join(kinds)})"
+                f"{source}: geometry: unknown key {_show(key)} (allowed: {', '.join(kinds)}, "
+                "self_collision)"
             )
     parts: dict[str, list] = {k: [] for k in kinds}
+    bodies: list[str | None] = []
     for kind in kinds:
         items = raw.get(kind, [])
         if not isinstance(items, list):
@@ -399,8 +476,10 @@ def outline_from_dict(raw: object, names: Mapping[str, sp.Symbol], source: str) 
             where = f"{source}: geometry.{kind}[{i}]"
             want = {"polygons": ("points",), "segments": ("from", "to"),
                     "discs": ("center", "radius")}[kind]
-            if not isinstance(item, Mapping) or set(item) != set(want):
-                raise ModelError(f"{where}: needs exactly the keys {', '.join(want)}")
+            if not isinstance(item, Mapping) or set(item) - {"body"} != set(want):
+                raise ModelError(f"{where}: needs exactly the keys {', '.join(want)} "
+                                 "(and optionally body)")
+            bodies.append(_body_name(item["body"], f"{where}.body") if "body" in item else None)
             if kind == "polygons":
                 pts = item["points"]
                 if not isinstance(pts, list) or len(pts) < 3:
@@ -414,8 +493,11 @@ def outline_from_dict(raw: object, names: Mapping[str, sp.Symbol], source: str) 
             else:
                 parts[kind].append((_outline_point(item["center"], names, f"{where}.center"),
                                     _component(item["radius"], names, f"{where}.radius")))
+    pairs = _self_collision(raw["self_collision"], bodies, source) if "self_collision" in raw \
+        else ()
     try:
-        return Outline(tuple(parts["polygons"]), tuple(parts["segments"]), tuple(parts["discs"]))
+        return Outline(tuple(parts["polygons"]), tuple(parts["segments"]), tuple(parts["discs"]),
+                       tuple(bodies) if any(b is not None for b in bodies) else (), pairs)
     except ModelError as exc:
         raise ModelError(f"{source}: {exc}") from None
 
@@ -425,13 +507,22 @@ def _outline_to_dict(outline: Outline) -> dict[str, Any]:
         return [format_expression(p[0]), format_expression(p[1])]
 
     out: dict[str, Any] = {}
-    if outline.polygons:
-        out["polygons"] = [{"points": [pt(p) for p in poly]} for poly in outline.polygons]
-    if outline.segments:
-        out["segments"] = [{"from": pt(a), "to": pt(b)} for a, b in outline.segments]
-    if outline.discs:
-        out["discs"] = [{"center": pt(c), "radius": format_expression(r)}
-                        for c, r in outline.discs]
+    if outline.self_collision:
+        out["self_collision"] = [list(p) for p in outline.self_collision]
+    items: dict[str, list[dict[str, Any]]] = {
+        "polygons": [{"points": [pt(p) for p in poly]} for poly in outline.polygons],
+        "segments": [{"from": pt(a), "to": pt(b)} for a, b in outline.segments],
+        "discs": [{"center": pt(c), "radius": format_expression(r)} for c, r in outline.discs],
+    }
+    k = 0
+    for kind in ("polygons", "segments", "discs"):
+        for item in items[kind]:
+            body = outline.bodies[k] if outline.bodies else None
+            if body is not None:
+                item["body"] = body
+            k += 1
+        if items[kind]:
+            out[kind] = items[kind]
     return out
 
 
@@ -469,8 +560,11 @@ def system_to_dict(sys: ControlSystem) -> dict[str, Any]:
         }
         for f in sys.fields
     ]
-    if sys.limits:
+    if sys.limits.bounds:
         out["limits"] = {k: [lo, hi] for k, (lo, hi) in sys.limits.as_dict().items()}
+    if sys.limits.relative:
+        out["relative_limits"] = {k: [lo, hi]
+                                  for k, (lo, hi) in sys.limits.relative_dict().items()}
     if sys.geometry is not None:
         out["geometry"] = _outline_to_dict(sys.geometry)
     return out
@@ -553,7 +647,14 @@ def _to_toml(data: Mapping[str, Any]) -> str:
     if data.get("limits"):
         lines += ["", "[limits]"]
         lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in data["limits"].items()]
-    for kind, items in data.get("geometry", {}).items():
+    if data.get("relative_limits"):
+        lines += ["", "[relative_limits]"]
+        lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in data["relative_limits"].items()]
+    geometry = dict(data.get("geometry", {}))
+    if "self_collision" in geometry:
+        pairs = _toml_value(geometry.pop("self_collision"))
+        lines += ["", "[geometry]", f"self_collision = {pairs}"]
+    for kind, items in geometry.items():
         for item in items:
             lines += ["", f"[[geometry.{kind}]]"]
             lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in item.items()]

@@ -4,13 +4,18 @@ Neither changes the dynamics; they describe where the robot may go
 (INTERFACE.md "Limits, geometry and worlds"):
 
 * :class:`Limits` — closed intervals ``lo ≤ x_j ≤ hi`` on some coordinates
-  (model units / radians); :meth:`Limits.tightened` intersects two sets of
-  limits (``--limit`` adds or tightens, never widens);
+  (model units / radians), and *relative limits* ``lo ≤ g(q) ≤ hi`` on
+  expressions of the coordinates (hitch angles ``theta0 - theta1``; the
+  ``[relative_limits]`` table of model files); :meth:`Limits.tightened`
+  intersects two sets of box limits (``--limit`` adds or tightens, never widens)
+  and keeps the relative ones;
 * :class:`Outline` — the robot's shape in the plane for collision checks:
   polygons, segments and discs whose points are sympy expressions of the
   coordinates and parameters (parsed by the safe grammar from model files, or
   built in by :mod:`nilpotent.models.outlines`).  A disc of radius 0 is a
-  point (the trident snake's wheels).
+  point (the trident snake's wheels).  Parts may belong to named *bodies*
+  (``body = "car"``), and ``self_collision`` lists the pairs of bodies that must
+  never touch (self-collision).
 
 Numeric evaluation (arrays of configurations → shapely geometries) lives in
 :mod:`nilpotent.planning.robot`.
@@ -41,11 +46,15 @@ class Limits:
     bounds:
         ``(name, lo, hi)`` per limited coordinate: ``lo ≤ name ≤ hi`` (model
         units, radians for angles).
+    relative:
+        ``(label, expression, lo, hi)`` per relative limit: ``lo ≤ expression(q) ≤ hi``;
+        ``label`` is the text it was given as (``"theta0 - theta1"``), the expression a
+        sympy expression of the coordinates only.
 
     Raises
     ------
     ModelError
-        A bound that is not finite, ``lo > hi``, or a name given twice.
+        A bound that is not finite, ``lo > hi``, or a name (label) given twice.
 
     Examples
     --------
@@ -54,6 +63,7 @@ class Limits:
     """
 
     bounds: tuple[tuple[str, float, float], ...] = ()
+    relative: tuple[tuple[str, sp.Expr, float, float], ...] = ()
 
     def __post_init__(self) -> None:
         seen: set[str] = set()
@@ -69,13 +79,31 @@ class Limits:
             seen.add(name)
             clean.append((str(name), lo, hi))
         object.__setattr__(self, "bounds", tuple(clean))
+        labels: set[str] = set()
+        rel = []
+        for label, expr, lo, hi in self.relative:
+            lo, hi = float(lo), float(hi)
+            where = f"relative limit {label!r}"
+            if not (math.isfinite(lo) and math.isfinite(hi)):
+                raise ModelError(f"{where}: bounds must be finite, got [{lo}, {hi}]")
+            if lo > hi:
+                raise ModelError(f"{where}: lower bound {lo} is above upper bound {hi}")
+            if label in labels:
+                raise ModelError(f"{where} given twice")
+            labels.add(label)
+            rel.append((str(label), as_expr(expr), lo, hi))
+        object.__setattr__(self, "relative", tuple(rel))
 
     def __bool__(self) -> bool:
-        return bool(self.bounds)
+        return bool(self.bounds or self.relative)
 
     def as_dict(self) -> dict[str, tuple[float, float]]:
-        """``{name: (lo, hi)}`` in the order given."""
+        """``{name: (lo, hi)}`` of the box limits, in the order given."""
         return {name: (lo, hi) for name, lo, hi in self.bounds}
+
+    def relative_dict(self) -> dict[str, tuple[float, float]]:
+        """``{label: (lo, hi)}`` of the relative limits, in the order given."""
+        return {label: (lo, hi) for label, _, lo, hi in self.relative}
 
     def tightened(self, other: Mapping[str, tuple[float, float]]) -> Limits:
         """The intersection with ``other``; an empty intersection raises :class:`ModelError`."""
@@ -89,10 +117,11 @@ class Limits:
                         f"the model's [{out[name][0]}, {out[name][1]}]"
                     )
             out[name] = (lo, hi)
-        return Limits(tuple((k, lo, hi) for k, (lo, hi) in out.items()))
+        return Limits(tuple((k, lo, hi) for k, (lo, hi) in out.items()), self.relative)
 
     def check_names(self, coordinates: Iterable[str], source: str) -> None:
-        """Raise :class:`ModelError` if a limit names no coordinate."""
+        """Raise :class:`ModelError` if a limit names no coordinate, or a relative limit
+        uses a name that is not a coordinate (or none at all)."""
         names = list(coordinates)
         for name, _, _ in self.bounds:
             if name not in names:
@@ -100,6 +129,17 @@ class Limits:
                     f"{source}: limit on {name!r}, which is not a coordinate "
                     f"(coordinates: {', '.join(names)})"
                 )
+        for label, expr, _, _ in self.relative:
+            used = {str(v) for v in as_expr(expr).free_symbols}
+            unknown = sorted(used - set(names))
+            if unknown:
+                raise ModelError(
+                    f"{source}: relative limit {label!r} uses {', '.join(unknown)}, which "
+                    f"{'is' if len(unknown) == 1 else 'are'} not coordinates (a relative "
+                    f"limit is an expression of the coordinates {', '.join(names)} only)")
+            if not used:
+                raise ModelError(f"{source}: relative limit {label!r} is a constant "
+                                 "(it must depend on the coordinates)")
 
 
 @dataclass(frozen=True)
@@ -114,6 +154,12 @@ class Outline:
         ``((X0, Y0), (X1, Y1))`` pairs (legs, hitch bars).
     discs:
         ``((X, Y), R)``: centre and radius (``R = 0``: a point).
+    bodies:
+        The body each part belongs to, in the order polygons, segments, discs (a name,
+        or ``None``: in no body); empty: no bodies.
+    self_collision:
+        Pairs ``(A, B)`` of distinct body names that must never touch (every part of
+        ``A`` against every part of ``B``).
 
     The symbols are the model's coordinates and parameters (as
     ``sympy.Symbol(name)``).
@@ -124,12 +170,15 @@ class Outline:
         A polygon with fewer than 3 points, an empty outline, or a disc whose radius
         is a constant that is negative or not finite (a radius that depends on the
         configuration is checked where it is evaluated,
-        :class:`nilpotent.planning.robot.Robot`).
+        :class:`nilpotent.planning.robot.Robot`); ``bodies`` not one per part, a
+        self-collision pair naming an unknown body, a body twice, or given twice.
     """
 
     polygons: tuple[tuple[Point2, ...], ...] = ()
     segments: tuple[tuple[Point2, Point2], ...] = ()
     discs: tuple[tuple[Point2, sp.Expr], ...] = ()
+    bodies: tuple[str | None, ...] = ()
+    self_collision: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         for i, poly in enumerate(self.polygons):
@@ -148,6 +197,28 @@ class Outline:
             if not (math.isfinite(value) and value >= 0):
                 raise ModelError(
                     f"geometry.discs[{i}].radius = {r}: a radius must be a finite number >= 0")
+        count = len(self.polygons) + len(self.segments) + len(self.discs)
+        if self.bodies and len(self.bodies) != count:
+            raise ModelError(f"geometry: {len(self.bodies)} body names for {count} parts "
+                             "(one per part, or none)")
+        known = {b for b in self.bodies if b is not None}
+        pairs: set[frozenset[str]] = set()
+        for i, pair in enumerate(self.self_collision):
+            where = f"geometry.self_collision[{i}]"
+            if len(pair) != 2:
+                raise ModelError(f"{where}: a pair of two body names, got {pair!r}")
+            a, b = pair
+            for name in (a, b):
+                if name not in known:
+                    raise ModelError(
+                        f"{where}: no body named {name!r} (bodies: "
+                        f"{', '.join(sorted(known)) or 'none; give parts a body = NAME'})")
+            if a == b:
+                raise ModelError(f"{where}: [{a!r}, {b!r}] pairs a body with itself")
+            key = frozenset((a, b))
+            if key in pairs:
+                raise ModelError(f"{where}: the pair [{a!r}, {b!r}] is given twice")
+            pairs.add(key)
 
     def expressions(self) -> tuple[sp.Expr, ...]:
         """Every expression of the outline, in a fixed order (polygons, segments, discs)."""
@@ -173,6 +244,20 @@ class Outline:
         for i in range(len(self.discs)):
             out += [f"geometry.discs[{i}].center[0]", f"geometry.discs[{i}].center[1]",
                     f"geometry.discs[{i}].radius"]
+        return tuple(out)
+
+    def body_names(self) -> tuple[str, ...]:
+        """The bodies' names, in the order they first appear."""
+        return tuple(dict.fromkeys(b for b in self.bodies if b is not None))
+
+    def self_collision_parts(self) -> tuple[tuple[int, int], ...]:
+        """Pairs of part indices (polygons, segments, discs order) that must never touch:
+        every part of ``A`` with every part of ``B`` for each pair ``(A, B)``."""
+        out = []
+        for a, b in self.self_collision:
+            ia = [k for k, name in enumerate(self.bodies) if name == a]
+            ib = [k for k, name in enumerate(self.bodies) if name == b]
+            out += [(i, j) for i in ia for j in ib]
         return tuple(out)
 
     def free_names(self) -> set[str]:
