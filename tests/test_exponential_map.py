@@ -165,7 +165,8 @@ def test_frame_fields_past_the_expansion_budget_give_the_same_coordinates(monkey
     reference = privileged_coordinates(fresh("car-trailers:4"), method="algebraic")
     sys = fresh("car-trailers:4")
     f = analyze(sys)
-    cache = sys._cache.get(brackets._CACHE_KEY, {})  # the fields the analysis expanded, if any
+    # the fields the analysis expanded, if any
+    cache = brackets._MEMO.get(sys, dict).get(brackets._CACHE_KEY, {})
     for word in list(cache):
         if not isinstance(word, int):
             del cache[word]

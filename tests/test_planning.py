@@ -15,7 +15,7 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from nilpotent.errors import PlanningError, SingularPointError
+from nilpotent.errors import OptionError, PlanningError, SingularPointError
 from nilpotent.models import get_model
 from nilpotent.planning import Plan, Segment, plan
 
@@ -161,11 +161,12 @@ def test_singular_joint_configuration_is_reported():
         plan(get_model("trident-snake-joints"), q, np.array(q) + 0.01, engine="scipy")
 
 
-def test_bad_options_are_planning_errors():
+def test_bad_options_are_option_errors_bad_points_planning_errors():
+    """A bad option value is an OptionError (kind ``option``), as on the command line."""
     system = get_model("unicycle")
-    with pytest.raises(PlanningError, match="anchor"):
+    with pytest.raises(OptionError, match="anchor"):
         plan(system, (0, 0, 0), (0.1, 0, 0), anchor="nowhere")
-    with pytest.raises(PlanningError, match="tol"):
+    with pytest.raises(OptionError, match="tol"):
         plan(system, (0, 0, 0), (0.1, 0, 0), tol=-1)
     with pytest.raises(PlanningError, match="coordinates"):
         plan(system, (0, 0), (0.1, 0, 0))
@@ -206,5 +207,5 @@ def test_handover_to_shooting_refinement_on_a_high_step_system():
     kinds = [it.kind for it in p.iterations]
     assert "newton" in kinds and kinds[0] == "nilpotent"
     assert np.linalg.norm(resimulate(system, np.zeros(4), p.segments) - goal) <= 1e-8
-    with pytest.raises(PlanningError, match="handover"):
+    with pytest.raises(OptionError, match="handover"):
         plan(system, np.zeros(4), goal, handover=-1.0)

@@ -72,6 +72,7 @@ if TYPE_CHECKING:
     from nilpotent.numeric import compile_fields as compile_fields
     from nilpotent.numeric import compile_system as compile_system
     from nilpotent.numeric import integrate as integrate
+    from nilpotent.numeric.settings import IntegrationSettings as IntegrationSettings
     from nilpotent.numeric.signals import Signal as Signal
     from nilpotent.numeric.signals import bracket_signal as bracket_signal
     from nilpotent.planning import Plan as Plan
@@ -107,6 +108,7 @@ __all__ = [
     "ControlSystem",
     "Filtration",
     "GlobalPlan",
+    "IntegrationSettings",
     "Limits",
     "ModelInfo",
     "NilpotentApproximation",

@@ -26,6 +26,8 @@ from nilpotent.numeric.integrate import BatchSolution as BatchSolution
 from nilpotent.numeric.integrate import Status as Status
 from nilpotent.numeric.integrate import integrate as integrate
 from nilpotent.numeric.integrate import solve_function_input as solve_function_input
+from nilpotent.numeric.settings import DEFAULT_SETTINGS as DEFAULT_SETTINGS
+from nilpotent.numeric.settings import IntegrationSettings as IntegrationSettings
 from nilpotent.numeric.signals import FunctionSignal as FunctionSignal
 from nilpotent.numeric.signals import InputSignal as InputSignal
 from nilpotent.numeric.signals import Segment as Segment
@@ -37,6 +39,7 @@ from nilpotent.numeric.tableaux import ButcherTableau as ButcherTableau
 
 __all__ = [
     "BACKENDS",
+    "DEFAULT_SETTINGS",
     "DOP853",
     "ENGINES",
     "METHODS",
@@ -48,6 +51,7 @@ __all__ = [
     "Engine",
     "FunctionSignal",
     "InputSignal",
+    "IntegrationSettings",
     "Segment",
     "Signal",
     "Status",

@@ -441,19 +441,24 @@ def _compile_system(system: Any, backend: str) -> CompiledSystem:
 
 @dataclass(frozen=True, eq=False)
 class CompiledMap:
-    """A compiled vector map ``R^n → R^n``, ``z ↦ (f_1(z), …, f_n(z))``, over any batch shape.
+    """A compiled map ``R^n → R^k``, ``z ↦ (f_1(z), …, f_k(z))``, over any batch shape.
 
-    Built by :func:`compile_map`; calling it on an array of shape ``(..., n)``
-    returns ``(..., n)`` (one point ``(n,)`` gives ``(n,)``).  Picklable: the
-    receiving process reloads the generated module from the cache.
+    Built by :func:`compile_map` (``k = n`` for a change of coordinates);
+    calling it on an array of shape ``(..., n)`` returns ``(..., k)`` (one
+    point ``(n,)`` gives ``(k,)``).  Picklable: the receiving process reloads
+    the generated module from the cache.
 
     Attributes
     ----------
-    system:
-        The map as the single "field" of a :class:`CompiledSystem` (numpy backend).
+    system : CompiledSystem
+        The map as the "fields" of a :class:`CompiledSystem` (numpy backend):
+        the ``k`` values in columns of ``n`` (the last one zero-padded).
+    size : int
+        ``k``, the number of values (``0``: as many as coordinates).
     """
 
     system: CompiledSystem
+    size: int = 0
 
     @property
     def name(self) -> str:
@@ -463,14 +468,22 @@ class CompiledMap:
     def n(self) -> int:
         return self.system.n
 
+    @property
+    def outputs(self) -> int:
+        """``k``, the number of values at each point."""
+        return self.size or self.n
+
     def __call__(self, points: Any) -> np.ndarray:
         arr = np.asarray(points, dtype=np.float64)
         if arr.ndim == 0 or arr.shape[-1] != self.n:
             raise OptionError(f"{self.name}: points must have shape (..., {self.n}), "
                               f"got {arr.shape}")
         flat = np.ascontiguousarray(arr.reshape(-1, self.n))
-        values = self.system.numpy_module.fields(flat)[:, :, 0]
-        return values.reshape(arr.shape)
+        columns = self.system.numpy_module.fields(flat)  # (N, n, columns)
+        if not self.size:
+            return columns[:, :, 0].reshape(arr.shape)
+        values = columns.transpose(0, 2, 1).reshape(flat.shape[0], -1)[:, : self.size]
+        return values.reshape((*arr.shape[:-1], self.size))
 
 
 def compile_map(
@@ -479,30 +492,46 @@ def compile_map(
     params: Mapping[str | sp.Symbol, Any] | None = None,
     *,
     name: str = "map",
+    outputs: int | None = None,
 ) -> CompiledMap:
-    """Compile the map ``coordinates ↦ expressions`` (as many expressions as coordinates).
+    """Compile the map ``coordinates ↦ expressions``.
 
     Parameters
     ----------
-    coordinates:
+    coordinates : Sequence[sympy.Symbol]
         The ``n`` argument symbols, in order.
-    expressions:
-        ``n`` sympy expressions of them (e.g. ``PrivilegedCoordinates.forward``
-        of the model coordinates, or ``.inverse`` of the privileged names).
-    params:
+    expressions : Sequence[sympy.Expr]
+        The sympy expressions of them: ``n`` of them for a change of
+        coordinates (e.g. ``PrivilegedCoordinates.forward`` of the model
+        coordinates, or ``.inverse`` of the privileged names), or ``outputs``.
+    params : Mapping or None
         Values of the other symbols (as in :func:`compile_fields`).
-    name:
+    name : str
         Label for messages and generated files.
+    outputs : int or None
+        ``None``: a change of coordinates (as many expressions as
+        coordinates); a number ``k >= 1``: any ``k`` values (a robot's
+        outline, :class:`nilpotent.planning.robot.Robot`).
 
     Raises
     ------
     ModelError
-        A count that differs from the coordinates', or a symbol without a value.
+        A count that differs from the coordinates' (or from ``outputs``), or a
+        symbol without a value.
     """
     exprs = tuple(expressions)
-    if len(exprs) != len(tuple(coordinates)):
-        raise ModelError(f"{name}: a map needs as many expressions as coordinates")
-    return CompiledMap(compile_fields(coordinates, [exprs], params, name=name, backend="numpy"))
+    n = len(tuple(coordinates))
+    if outputs is None:
+        if len(exprs) != n:
+            raise ModelError(f"{name}: a map needs as many expressions as coordinates")
+        return CompiledMap(compile_fields(coordinates, [exprs], params, name=name,
+                                          backend="numpy"))
+    if outputs < 1 or len(exprs) != outputs:
+        raise ModelError(f"{name}: {outputs} values announced, {len(exprs)} expressions given")
+    padded = exprs + (sp.Integer(0),) * (-len(exprs) % n)
+    columns = [padded[k : k + n] for k in range(0, len(padded), n)]
+    return CompiledMap(compile_fields(coordinates, columns, params, name=name, backend="numpy"),
+                       outputs)
 
 
 # --- code generation ---------------------------------------------------------

@@ -28,7 +28,6 @@ never raised (:meth:`BatchSolution.raise_for_status` raises when wanted).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -38,20 +37,21 @@ import numpy as np
 from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.compile import CompiledSystem
 from nilpotent.numeric.engines import ENGINES as ENGINES
-from nilpotent.numeric.engines import choose_engine, engine_names, input_cycles
+from nilpotent.numeric.engines import choose_engine, input_cycles
 from nilpotent.numeric.engines.base import Status as Status
 from nilpotent.numeric.engines.base import check_times
 from nilpotent.numeric.engines.numba_engine import kernels_cached as kernels_cached
 from nilpotent.numeric.engines.scipy_engine import solve_function_input as solve_function_input
 from nilpotent.numeric.sampled import as_signal
+from nilpotent.numeric.settings import DEFAULT_SETTINGS as DEFAULT_SETTINGS
+from nilpotent.numeric.settings import METHODS as METHODS
+from nilpotent.numeric.settings import IntegrationSettings as IntegrationSettings
+from nilpotent.numeric.settings import resolve_settings
 from nilpotent.numeric.signals import FunctionSignal, Signal
 from nilpotent.numeric.tableaux import DOP853
 from nilpotent.numeric.types import PerTrajectory, Samples, States, Times
 
-METHODS: dict[str, str] = {
-    "adaptive": "DOP853 with embedded error control (scipy's step-size rules)",
-    "fixed": "DOP853 with equal steps per segment; error estimated by step halving",
-}
+
 def _ro(a: np.ndarray) -> np.ndarray:
     a = np.asarray(a)
     a.setflags(write=False)
@@ -136,8 +136,6 @@ def _integrate_function(system: CompiledSystem, xs: np.ndarray, inputs: Function
     if method != "adaptive" or engine not in ("auto", "scipy"):
         raise OptionError("a function input is integrated by solve_ivp (method='adaptive', "
                           "engine='scipy')")
-    if not (rtol > 0 and atol >= 0 and math.isfinite(rtol) and math.isfinite(atol)):
-        raise OptionError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
     ts = check_times(times, np.array([inputs.duration]))
     finals, samples, status, evaluations = [], [], [], []
     for x in xs:
@@ -165,17 +163,18 @@ def integrate(
     *,
     duration: float | None = None,
     hold: str = "linear",
-    method: str = "adaptive",
-    engine: str = "auto",
+    settings: IntegrationSettings | None = None,
     times: Sequence[float] | np.ndarray | None = None,
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
-    steps: int = 64,
-    max_steps: int = 100_000,
     min_step: float | None = None,
-    bound: float = 1e8,
     estimate_error: bool = True,
     threads: int | None = None,
+    method: str | None = None,
+    engine: str | None = None,
+    rtol: float | None = None,
+    atol: float | None = None,
+    steps: int | None = None,
+    max_steps: int | None = None,
+    bound: float | None = None,
 ) -> BatchSolution:
     """Integrate ``dx/dt = Σ_i u_i(t) X_i(x)`` for a batch of states and inputs.
 
@@ -199,23 +198,16 @@ def integrate(
     hold:
         How samples ``(T, U)`` are read between their times: ``"linear"``
         interpolation (as python-control) or ``"zero"``-order hold.
-    method:
-        ``"adaptive"`` or ``"fixed"`` (:data:`METHODS`).
-    engine:
-        One of :data:`ENGINES` (see the module docstring).
+    settings : IntegrationSettings or None
+        Method, engine (see the module docstring), tolerances, steps and blow-up
+        bound (:class:`~nilpotent.numeric.settings.IntegrationSettings`; default
+        :data:`~nilpotent.numeric.settings.DEFAULT_SETTINGS`).  A trajectory with
+        some ``|x_k| > bound`` is stopped (:attr:`Status.BLOW_UP`).
     times:
         Sample times in ``[0, duration]`` (shared by the batch; sorted).
-    rtol, atol:
-        Tolerances of the adaptive method.
-    steps:
-        Steps per segment of the fixed method (even, ≥ 2).
-    max_steps:
-        Most steps (accepted + rejected) per trajectory.
     min_step:
         Smallest step of the adaptive method (default ``1e-13 ×`` duration);
         numba only (scipy and heyoka have none).
-    bound:
-        A trajectory with some ``|x_k| > bound`` is stopped (:attr:`Status.BLOW_UP`).
     estimate_error:
         For ``fixed``: also integrate with ``steps/2`` to estimate the error.
     threads:
@@ -223,6 +215,9 @@ def integrate(
         running heyoka's SIMD batches (default: one more than the cores this
         process may use, so that every core stays busy while a thread waits
         for Python's GIL; the results do not depend on it).
+    method, engine, rtol, atol, steps, max_steps, bound : optional
+        The loose form of ``settings`` (kept for one release): each one given
+        overrides that field of ``settings``.
 
     Raises
     ------
@@ -233,12 +228,12 @@ def integrate(
     MissingExtraError
         The engine asked for is not installed.
     """
-    if method not in METHODS:
-        raise OptionError(f"unknown method {method!r} (choose from {', '.join(METHODS)})")
-    if engine not in engine_names():
-        raise OptionError(
-            f"unknown engine {engine!r} (choose from {', '.join(engine_names())})"
-        )
+    chosen_settings = resolve_settings(settings, DEFAULT_SETTINGS, method=method, engine=engine,
+                                       rtol=rtol, atol=atol, steps=steps, max_steps=max_steps,
+                                       bound=bound)
+    method, engine = chosen_settings.method, chosen_settings.engine
+    rtol, atol, steps = chosen_settings.rtol, chosen_settings.atol, chosen_settings.steps
+    max_steps, bound = chosen_settings.max_steps, chosen_settings.bound
     xs = np.ascontiguousarray(np.atleast_2d(np.asarray(x0, dtype=np.float64)))
     if xs.ndim != 2 or xs.shape[1] != system.n:
         raise OptionError(f"initial states must have shape (B, {system.n}), got {np.shape(x0)}")
@@ -250,12 +245,8 @@ def integrate(
     sig = inputs.broadcast(batch)
     total = sig.total_durations
     ts = check_times(times, total)
-    if not (rtol > 0 and atol >= 0 and math.isfinite(rtol) and math.isfinite(atol)):
-        raise OptionError(f"need rtol > 0 and atol >= 0, got rtol={rtol}, atol={atol}")
-    if method == "fixed" and (int(steps) != steps or steps < 2 or (estimate_error and steps % 2)):
+    if method == "fixed" and estimate_error and steps % 2:
         raise OptionError(f"steps must be an even integer >= 2, got {steps}")
-    if max_steps < 1 or not bound > 0:
-        raise OptionError("max_steps must be >= 1 and bound > 0")
     if min_step is None:
         min_step = 1e-13 * float(np.max(total)) if batch else 0.0
     chosen = choose_engine(system, method, engine, batch, input_cycles(sig))

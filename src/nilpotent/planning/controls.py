@@ -43,16 +43,6 @@ def reverse_segments(segments: Sequence[Segment]) -> tuple[Segment, ...]:
     return tuple(s.reversed() for s in reversed(segments))
 
 
-def input_at(segments: Sequence[Segment], t: float) -> np.ndarray:
-    """The input vector at global time ``t`` (segments one after another from 0)."""
-    start = 0.0
-    for seg in segments:
-        if t <= start + seg.duration:
-            return seg.values(t - start)
-        start += seg.duration
-    return segments[-1].values(segments[-1].duration)
-
-
 def coefficients(segments: Sequence[Segment], harmonics: Sequence[int]) -> np.ndarray:
     """The input coefficients as one vector: per segment, per input, ``constant``,
     ``cos[0..K-1]``, ``sin[0..K-1]`` with ``K = harmonics[segment]`` (zero-padded)."""

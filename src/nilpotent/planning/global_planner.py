@@ -48,6 +48,7 @@ from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import (
     ComputationLimitError,
     IntegrationError,
+    OptionError,
     PlanningError,
     SingularPointError,
 )
@@ -432,7 +433,7 @@ def plan_global(
         would need more than :data:`MAX_PIECES` pieces.
     """
     if not (time_limit > 0 and math.isfinite(time_limit)):
-        raise PlanningError(f"time limit must be a positive number of seconds, got {time_limit}")
+        raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
     with budget.time_budget(time_limit):
         return _plan_global(
             sys, start, goal, tol, world=world, limits=limits,
@@ -465,9 +466,9 @@ def _plan_global(
 ) -> GlobalPlan:
     t0 = time.perf_counter()
     if not (tol > 0 and math.isfinite(tol)):
-        raise PlanningError(f"tol must be a positive number, got {tol}")
+        raise OptionError(f"tol must be a positive number, got {tol}")
     if not (max_piece > 0 and math.isfinite(max_piece)):
-        raise PlanningError(f"max_piece must be > 0, got {max_piece}")
+        raise OptionError(f"max_piece must be > 0, got {max_piece}")
     options: dict[str, Any] = {"engine": engine, "anchor": anchor,
                                "max_iterations": max_iterations, "objective": objective}
     checker = Checker(sys, world, limits, singular_margin, clearance)

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.errors import NilpotentError, PlanningError, SingularPointError
+from nilpotent.errors import NilpotentError, OptionError, PlanningError, SingularPointError
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
 from nilpotent.planning.controls import (
@@ -520,7 +520,7 @@ def plan(
     True
     """
     if not time_limit > 0:
-        raise PlanningError(f"time limit must be a positive number of seconds, got {time_limit}")
+        raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
     with budget.time_budget(time_limit):
         return _plan(sys, start, goal, tol, max_iterations=max_iterations, anchor=anchor,
                      builder=builder, method=method, raise_on_failure=raise_on_failure,
@@ -548,14 +548,14 @@ def _plan(
     t_start = time.perf_counter()
     method = method_for(objective, method)
     if anchor != "auto" and anchor not in ANCHORS:
-        raise PlanningError(f"unknown anchor {anchor!r} (choose from auto, {', '.join(ANCHORS)})")
+        raise OptionError(f"unknown anchor {anchor!r} (choose from auto, {', '.join(ANCHORS)})")
     if builder != "auto" and builder not in BUILDERS:
         known = ", ".join(BUILDERS)
-        raise PlanningError(f"unknown builder {builder!r} (choose from auto, {known})")
+        raise OptionError(f"unknown builder {builder!r} (choose from auto, {known})")
     if not (tol > 0 and math.isfinite(tol)):
-        raise PlanningError(f"tol must be a positive number, got {tol}")
+        raise OptionError(f"tol must be a positive number, got {tol}")
     if max_iterations < 1:
-        raise PlanningError(f"max_iterations must be >= 1, got {max_iterations}")
+        raise OptionError(f"max_iterations must be >= 1, got {max_iterations}")
     system = sys
     x0 = _as_floats(start, system.n, "start")
     xg = _as_floats(goal, system.n, "goal")
@@ -574,9 +574,9 @@ def _plan(
         high_step = choose_builder(system, x0) == "symbolic"  # step >= 3 near the start
         handover = HANDOVER if fast and high_step else 0.0
     elif not (handover >= 0 and math.isfinite(handover)):
-        raise PlanningError(f"handover must be a number >= 0, got {handover}")
+        raise OptionError(f"handover must be a number >= 0, got {handover}")
     elif handover > 0 and not refine:
-        raise PlanningError("handover > 0 hands the end over to the refinement: needs refine=True")
+        raise OptionError("handover > 0 hands the end over to the refinement: needs refine=True")
 
     budget.check("building the local nilpotent model")
     if anchor == "start":

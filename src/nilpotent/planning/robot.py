@@ -1,8 +1,8 @@
 """A robot's outline evaluated at configurations: shapely geometries, limits, singular margin.
 
 :class:`Robot` compiles a system's :class:`~nilpotent.core.model.outline.Outline`
-(parameters substituted) with ``sympy.lambdify`` (the expressions came from
-the safe grammar or the built-ins) and turns arrays of configurations
+(parameters substituted) once with :func:`nilpotent.numeric.compile.compile_map`
+(the expressions came from the safe grammar or the built-ins) and turns arrays of configurations
 ``(N, n)`` into shapely 2 geometries, vectorised (``shapely.polygons``,
 ``shapely.linestrings``, ``shapely.points``): one row of ``P`` parts per
 configuration.  Discs are kept as their centre points plus a radius (the
@@ -33,6 +33,7 @@ from nilpotent.core.model.expressions import as_expr
 from nilpotent.core.model.outline import Limits, Outline
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ModelError, OptionError
+from nilpotent.numeric.compile import CompiledMap, compile_map
 
 __all__ = ["OutlinePoints", "Robot", "singular_margin_function"]
 
@@ -55,9 +56,9 @@ def singular_margin_function(system: ControlSystem) -> Callable[[np.ndarray], np
     return margin
 
 
-def _lambdify(system: ControlSystem, exprs: tuple[sp.Expr, ...]) -> Callable:
-    subs = [(sp.Symbol(k), v) for k, v in system.parameters]
-    return sp.lambdify([system.coordinates], [as_expr(e).subs(subs) for e in exprs], "numpy")
+def _compile_outline(system: ControlSystem, exprs: tuple[sp.Expr, ...]) -> CompiledMap:
+    return compile_map(system.coordinates, exprs, dict(system.parameters),
+                       name=f"{system.name}-outline", outputs=len(exprs))
 
 
 def _real_or_nan(value: Any) -> Any:
@@ -92,13 +93,13 @@ class Robot:
 
     system: ControlSystem
     limits: Limits | None = None
-    _fn: Callable | None = field(init=False, repr=False)
+    _fn: CompiledMap | None = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if self.limits is None:
             object.__setattr__(self, "limits", self.system.limits)
         outline = self.system.geometry
-        fn = None if outline is None else _lambdify(self.system, outline.expressions())
+        fn = None if outline is None else _compile_outline(self.system, outline.expressions())
         object.__setattr__(self, "_fn", fn)
         # the limited coordinates' indices and bounds, once (limit_margin is called for
         # single configurations thousands of times by OMPL's validity checks)
@@ -191,7 +192,7 @@ class Robot:
         assert self._fn is not None
         with np.errstate(all="ignore"):
             try:
-                vals = self._fn(q.T)
+                vals = self._fn(q).T
             except (ZeroDivisionError, OverflowError, ValueError, TypeError) as exc:
                 raise ModelError(f"model {self.system.name}: the outline [geometry] cannot be "
                                  f"evaluated ({type(exc).__name__}: {exc})") from None

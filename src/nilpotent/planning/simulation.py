@@ -29,6 +29,7 @@ from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import IntegrationError
 from nilpotent.numeric.engines import choose_engine
 from nilpotent.numeric.integrate import Status, integrate
+from nilpotent.numeric.settings import DEFAULT_SETTINGS
 from nilpotent.numeric.signals import Signal
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
@@ -36,9 +37,12 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
 from nilpotent.simulation.trajectory import Trajectory, simulate, stationary
 
-#: Tolerances of the true-system integration (DOP853).
-RTOL = 1e-12
-ATOL = 1e-13
+#: The integration of the true system (adaptive DOP853): the one default
+#: (:data:`nilpotent.numeric.settings.DEFAULT_SETTINGS`) with ``rtol = 1e-12``,
+#: ``atol = 1e-13`` (a documented override: a plan is checked against its goal
+#: tolerance, far below the default's); the engine and the step cap are chosen
+#: per call.
+PLANNING_SETTINGS = DEFAULT_SETTINGS.replace(rtol=1e-12, atol=1e-13)
 #: Most steps of one trajectory per segment of its controls (accepted and rejected);
 #: more: given up.
 MAX_STEPS = 20_000
@@ -76,8 +80,8 @@ def _bounded_integrate(compiled, xs: np.ndarray, inputs: Signal, engine: str, wh
         budget.check(what, hard)
         cap = _step_cap(engine, batch, hard, most)
         t0 = time.perf_counter()
-        sol = integrate(compiled, xs, inputs, engine=engine, rtol=RTOL, atol=ATOL,
-                        max_steps=cap)
+        sol = integrate(compiled, xs, inputs,
+                        settings=PLANNING_SETTINGS.replace(engine=engine, max_steps=cap))
         spent = time.perf_counter() - t0
         steps = np.asarray(sol.steps, dtype=float) + np.asarray(sol.rejected, dtype=float)
         _learn(engine, spent, float(steps.sum()) / max(1, batch), batch)
@@ -198,7 +202,7 @@ def simulate_plan(
         t0 = time.perf_counter()
         traj = simulate(
             compiled_system(system), Signal.from_segments(segments), np.asarray(x0, dtype=float),
-            times=times, engine=name, rtol=RTOL, atol=ATOL, max_steps=cap,
+            times=times, settings=PLANNING_SETTINGS.replace(engine=name, max_steps=cap),
         )
         spent = time.perf_counter() - t0
         if traj.status != Status.MAX_STEPS or cap >= most:

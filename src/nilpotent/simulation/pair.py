@@ -107,7 +107,8 @@ class CompiledPair:
         ``inputs`` is a batch of ``B`` controls (or one shared); ``times`` the
         sample times; ``y0`` the approximation's start (default ``y(starts)``);
         ``settings`` go to :func:`~nilpotent.numeric.integrate.integrate`
-        (``method``, ``engine``, ``rtol``, ``atol``, ``bound``, ``max_steps``, ``threads``).
+        (``settings=`` an :class:`~nilpotent.numeric.settings.IntegrationSettings`,
+        ``threads``, or the loose ``method``, ``engine``, ``rtol``, ...).
         """
         xs = np.ascontiguousarray(np.asarray(starts, dtype=float))
         ys = self.forward(xs) if y0 is None else np.asarray(y0, dtype=float)

@@ -20,8 +20,14 @@ from nilpotent.core.model.points import format_point
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
 from nilpotent.numeric.fits import loglog_slope
+from nilpotent.numeric.settings import IntegrationSettings, resolve_settings
 from nilpotent.numeric.signals import bracket_signal, check_bracket
-from nilpotent.simulation.comparison import bracket_run, floats, prepare_comparison
+from nilpotent.simulation.comparison import (
+    BRACKET_SETTINGS,
+    bracket_run,
+    floats,
+    prepare_comparison,
+)
 from nilpotent.strict_json import json_object
 
 __all__ = ["DEFAULT_AMPLITUDES", "ScalingStudy", "scaling_study"]
@@ -111,9 +117,10 @@ def scaling_study(
     point: Any = None,
     approximation: Any = None,
     samples: int = 101,
-    rtol: float = 1e-12,
-    atol: float = 1e-14,
-    engine: str = "auto",
+    settings: IntegrationSettings | None = None,
+    rtol: float | None = None,
+    atol: float | None = None,
+    engine: str | None = None,
 ) -> ScalingStudy:
     r"""Measure how the approximation error scales with the amplitude, per weight group.
 
@@ -125,8 +132,10 @@ def scaling_study(
     ----------
     sys, bracket, omega, periods, point : see :func:`compare_bracket_motion`
         The system, the bracket ``(I, J)`` and the input's frequency, periods, start.
-    approximation, samples, rtol, atol, engine : see :func:`compare_bracket_motion`
-        The approximation to compare with, samples per run, tolerances, engine.
+    approximation, samples, settings, rtol, atol, engine : see :func:`compare_bracket_motion`
+        The approximation to compare with, samples per run, how to integrate
+        (default :data:`~nilpotent.simulation.comparison.BRACKET_SETTINGS`;
+        ``rtol``/``atol``/``engine``: the loose form, kept for one release).
     amplitudes : sequence of float
         Positive amplitudes, at least two different values.
 
@@ -137,6 +146,7 @@ def scaling_study(
     IntegrationError
         A simulation stopped before the end.
     """
+    chosen = resolve_settings(settings, BRACKET_SETTINGS, rtol=rtol, atol=atol, engine=engine)
     amps = np.asarray([float(a) for a in amplitudes])
     if amps.size < 2 or np.unique(amps).size < 2:
         raise OptionError("a scaling study needs at least two different amplitudes")
@@ -145,12 +155,11 @@ def scaling_study(
     for a in amps:
         bracket_signal(sys.m, *check_bracket(sys.m, bracket), float(a), omega, periods)
     sysp, pair_ij, pt, approx, p = prepare_comparison(sys, bracket, point, approximation)
-    run = bracket_run(sysp, approx, p, pair_ij, amps, omega, periods, samples, rtol=rtol,
-                      atol=atol, engine=engine)
+    run = bracket_run(sysp, approx, p, pair_ij, amps, omega, periods, samples, settings=chosen)
     original_y = run.y()
     diff = np.abs(original_y - run.y_hat)  # (k, T, n)
     scale = float(np.nanmax(np.abs(original_y))) if original_y.size else 0.0
-    floor = 1e3 * (atol + rtol * scale)
+    floor = 1e3 * (chosen.atol + chosen.rtol * scale)
     weights = run.pair.weights
     errors = run.by_weight(diff, (1,))
     slopes = {w: loglog_slope(amps, err, floor) for w, err in errors.items()}

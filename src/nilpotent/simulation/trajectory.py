@@ -17,6 +17,7 @@ from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.compile import CompiledSystem, compile_system
 from nilpotent.numeric.integrate import Status, integrate
 from nilpotent.numeric.sampled import as_signal
+from nilpotent.numeric.settings import DEFAULT_SETTINGS, IntegrationSettings, resolve_settings
 from nilpotent.numeric.signals import FunctionSignal, Signal
 from nilpotent.numeric.types import State, States, Times
 
@@ -120,13 +121,14 @@ def simulate(
     hold: str = "linear",
     samples: int = 201,
     times: Sequence[float] | np.ndarray | None = None,
-    method: str = "adaptive",
-    engine: str = "auto",
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
-    steps: int = 64,
-    bound: float = 1e8,
-    max_steps: int = 100_000,
+    settings: IntegrationSettings | None = None,
+    method: str | None = None,
+    engine: str | None = None,
+    rtol: float | None = None,
+    atol: float | None = None,
+    steps: int | None = None,
+    bound: float | None = None,
+    max_steps: int | None = None,
 ) -> Trajectory:
     """Simulate ``dx/dt = Σ u_i(t) X_i(x)`` from ``x0`` (default: the origin).
 
@@ -154,8 +156,12 @@ def simulate(
         Equally spaced times from 0 to the signal's duration to record (≥ 2).
     times:
         Sample times instead (sorted, within the duration).
-    method, engine, rtol, atol, steps, bound, max_steps:
-        Integration settings (:func:`nilpotent.numeric.integrate.integrate`).
+    settings : IntegrationSettings or None
+        How to integrate (default
+        :data:`~nilpotent.numeric.settings.DEFAULT_SETTINGS`).
+    method, engine, rtol, atol, steps, bound, max_steps : optional
+        The loose form of ``settings`` (kept for one release): each one given
+        overrides that field.
 
     Raises
     ------
@@ -164,6 +170,8 @@ def simulate(
     PointError
         A start point that is not ``n`` finite numbers.
     """
+    chosen = resolve_settings(settings, DEFAULT_SETTINGS, method=method, engine=engine,
+                              rtol=rtol, atol=atol, steps=steps, bound=bound, max_steps=max_steps)
     compiled = as_compiled(sys)
     if isinstance(x0, Mapping) and isinstance(sys, ControlSystem):
         x0 = sys.point(x0)
@@ -182,18 +190,15 @@ def simulate(
     if isinstance(signal, FunctionSignal):
         from nilpotent.numeric.integrate import solve_function_input
 
-        if method != "adaptive" or engine not in ("auto", "scipy"):
+        if chosen.method != "adaptive" or chosen.engine not in ("auto", "scipy"):
             raise OptionError("a function input is integrated by solve_ivp (adaptive, scipy)")
         final, states, status, _ = solve_function_input(
             compiled, start, signal.evaluate, signal.breakpoints, times=ts,
-            rtol=rtol, atol=atol, max_steps=max_steps, bound=bound,
+            rtol=chosen.rtol, atol=chosen.atol, max_steps=chosen.max_steps, bound=chosen.bound,
         )
         return Trajectory(ts, states, compiled.name, compiled.coordinate_names, start, final,
-                          signal, status, float(rtol), "adaptive", "scipy")
-    sol = integrate(
-        compiled, start[None], signal, method=method, engine=engine, times=ts,
-        rtol=rtol, atol=atol, steps=steps, bound=bound, max_steps=max_steps,
-    )
+                          signal, status, float(chosen.rtol), "adaptive", "scipy")
+    sol = integrate(compiled, start[None], signal, settings=chosen, times=ts)
     return Trajectory(
         np.asarray(sol.times), sol.samples[0].copy(), compiled.name, compiled.coordinate_names,
         start, sol.final[0].copy(), signal, Status(int(sol.status[0])), sol.tolerance,

@@ -197,11 +197,12 @@ def _as_global(result: Any) -> Any:
 
 
 def _draw_inputs(ax: Any, plan: Any) -> None:
-    from nilpotent.planning.controls import input_at
+    from nilpotent.numeric.signals import Signal
 
     if plan.segments:
         t = np.linspace(0.0, plan.duration, 600)
-        u = np.array([input_at(plan.segments, s) for s in t])
+        signal = Signal.from_segments(plan.segments)  # the one control evaluator
+        u = np.array([signal.evaluate(s) for s in t])
         for i in range(u.shape[1]):
             ax.plot(t, u[:, i], lw=1.0, label=f"u{i + 1}")
         edges = np.cumsum([s.duration for s in plan.segments])[:-1]

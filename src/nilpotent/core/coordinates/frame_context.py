@@ -21,9 +21,15 @@ from nilpotent.core.analysis.filtration import Filtration
 from nilpotent.core.coordinates.jets import Poly, ZeroTest, to_symengine
 from nilpotent.core.decide.evaluation import double_inverse, exact_value
 from nilpotent.core.decide.spans import to_double
+from nilpotent.core.model.memo import IdentityMemo
 from nilpotent.errors import ComputationLimitError
 
 __all__ = ["EXACT_TRIAL_BUDGET", "needs_floats"]
+
+
+# the frame contexts of each system, owned here (the system is immutable); a context
+# refers to its system, so the table is bounded
+_CONTEXTS: IdentityMemo[dict] = IdentityMemo(maxsize=64)
 
 
 class FrameContext:
@@ -73,7 +79,7 @@ class FrameContext:
 
     @staticmethod
     def of(filtration: Filtration, numeric: bool = False) -> FrameContext:
-        cache = filtration.system._cache.setdefault("privileged.contexts", {})
+        cache = _CONTEXTS.get(filtration.system, dict)
         key = (filtration.point, filtration.frame, numeric)
         if key not in cache:
             cache[key] = FrameContext(filtration, numeric)

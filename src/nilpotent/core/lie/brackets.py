@@ -24,6 +24,7 @@ from typing import TypeAlias
 import symengine as se
 import sympy as sp
 
+from nilpotent.core.model.memo import IdentityMemo
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, OptionError, PointError
 
@@ -237,9 +238,18 @@ def bracket(
 # --- symengine word fields, cached per system --------------------------------
 
 
+# what this module memoises per system (word fields, symbols), owned here: the
+# system itself is immutable; an entry goes with its system
+_MEMO: IdentityMemo[dict] = IdentityMemo()
+
+
+def _memo(sys: ControlSystem) -> dict:
+    return _MEMO.get(sys, dict)
+
+
 def se_coordinates(sys: ControlSystem) -> tuple[se.Symbol, ...]:
     """The coordinates of ``sys`` as symengine symbols (cached)."""
-    cache = sys._cache
+    cache = _memo(sys)
     key = "brackets.se_coords"
     if key not in cache:
         cache[key] = tuple(se.Symbol(str(c)) for c in sys.coordinates)
@@ -258,10 +268,10 @@ def to_sympy(sys: ControlSystem, expr: se.Basic) -> sp.Expr:
     assumptions, which symengine does not keep).
     """
     value = sp.S(expr)
-    back = sys._cache.get("brackets.back")
+    back = _memo(sys).get("brackets.back")
     if back is None:
         back = {sp.Symbol(str(c)): c for c in sys.coordinates if c != sp.Symbol(str(c))}
-        sys._cache["brackets.back"] = back
+        _memo(sys)["brackets.back"] = back
     return value.xreplace(back) if back else value
 
 
@@ -333,7 +343,7 @@ def word_field_symengine(sys: ControlSystem, word: Word) -> SeField:
     Parameters are substituted (the fields are ``sys.specialized_fields``);
     $[v, u]$ is reused as $-[u, v]$.
     """
-    cache: dict[Word, SeField] = sys._cache.setdefault(_CACHE_KEY, {})
+    cache: dict[Word, SeField] = _memo(sys).setdefault(_CACHE_KEY, {})
     hit = cache.get(word)
     if hit is not None:
         return hit
@@ -363,7 +373,7 @@ def word_field_symengine(sys: ControlSystem, word: Word) -> SeField:
 
 def is_built(sys: ControlSystem, word: Word) -> bool:
     """Whether the symbolic field of ``word`` is already cached on ``sys``."""
-    return isinstance(word, int) or word in sys._cache.get(_CACHE_KEY, {})
+    return isinstance(word, int) or word in _memo(sys).get(_CACHE_KEY, {})
 
 
 def word_field(sys: ControlSystem, word: Word) -> tuple[sp.Expr, ...]:
@@ -387,7 +397,7 @@ def word_field(sys: ControlSystem, word: Word) -> tuple[sp.Expr, ...]:
     >>> word_field(s, (1, 2))
     (sin(theta), -cos(theta), 0)
     """
-    cache: dict[Word, tuple[sp.Expr, ...]] = sys._cache.setdefault(_SYMPY_CACHE_KEY, {})
+    cache: dict[Word, tuple[sp.Expr, ...]] = _memo(sys).setdefault(_SYMPY_CACHE_KEY, {})
     hit = cache.get(word)
     if hit is None:
         hit = tuple(to_sympy(sys, e) for e in word_field_symengine(sys, word))
@@ -428,7 +438,7 @@ def word_values_symengine(
     $Dv(p)\\,u(p) - Du(p)\\,v(p)$ from directional derivatives of the (built)
     fields of ``u`` and ``v``: the field of the longest words is never expanded.
     """
-    cache: dict[Word, SeField] = sys._cache.setdefault(_CACHE_KEY, {})
+    cache: dict[Word, SeField] = _memo(sys).setdefault(_CACHE_KEY, {})
     if word in cache or isinstance(word, int):
         return tuple(se.expand(e.subs(subs)) if e.free_symbols else e
                      for e in word_field_symengine(sys, word))

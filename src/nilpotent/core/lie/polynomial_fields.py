@@ -48,12 +48,12 @@ from nilpotent.core.lie.brackets import (
     se_coordinates,
     word_field_symengine,
 )
+from nilpotent.core.model.memo import IdentityMemo
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError
 
 __all__ = ["AtomUndefined", "HPoly", "PolynomialFields", "Unsupported", "polynomial_fields"]
 
-_CACHE_KEY = "polynomial_fields"
 _FREE_SEED = 20261130
 
 
@@ -482,10 +482,16 @@ def polynomial_fields(sys: ControlSystem) -> PolynomialFields | None:
     ComputationLimitError
         If a generator field is too large to expand (as for the expression path).
     """
-    cache = sys._cache
-    if _CACHE_KEY not in cache:
-        try:
-            cache[_CACHE_KEY] = PolynomialFields(sys)
-        except Unsupported:
-            cache[_CACHE_KEY] = None
-    return cache[_CACHE_KEY]
+    return _MEMO.get(sys, lambda: _build(sys))
+
+
+def _build(sys: ControlSystem) -> PolynomialFields | None:
+    try:
+        return PolynomialFields(sys)
+    except Unsupported:
+        return None
+
+
+# the polynomial fields per system, owned here (the system is immutable); a value
+# refers to its system, so the table is bounded
+_MEMO: IdentityMemo[PolynomialFields | None] = IdentityMemo(maxsize=64)

@@ -17,12 +17,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import sympy as sp
 
 from nilpotent import typeset
-from nilpotent.core.model.expressions import as_expr, negative_root
+from nilpotent.core.model.expressions import as_expr, exact_decimals, negative_root
+from nilpotent.core.model.memo import IdentityMemo
 from nilpotent.core.model.outline import Limits, Outline
 from nilpotent.errors import ModelError
 
@@ -79,7 +79,6 @@ class ControlSystem:
     description: str = ""
     limits: Limits = field(default_factory=Limits, compare=False, hash=False)
     geometry: Outline | None = field(default=None, compare=False, hash=False)
-    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False, hash=False)
 
     def __post_init__(self) -> None:
         coords = tuple(self.coordinates)
@@ -160,7 +159,7 @@ class ControlSystem:
             self.limits, self.geometry,
         )
 
-    @cached_property
+    @property
     def specialized_fields(self) -> tuple[tuple[Expr, ...], ...]:
         """The fields with every parameter replaced by its value.
 
@@ -169,12 +168,7 @@ class ControlSystem:
         :func:`nilpotent.core.decide.spans.exact_decimals`), so that every computation
         on the fields is exact.
         """
-        from nilpotent.core.model.expressions import exact_decimals
-
-        subs = [(sp.Symbol(k), exact_decimals(v)) for k, v in self.parameters]
-        return tuple(
-            tuple(exact_decimals(e.subs(subs) if subs else e) for e in f) for f in self.fields
-        )
+        return _SPECIALIZED.get(self, lambda: _specialize(self))
 
     def specialized(self) -> ControlSystem:
         """The same system with the parameters substituted (and then dropped).
@@ -302,3 +296,14 @@ def _check_real_geometry(
                 + (" and the parameters' values" if params else "")
                 + " (the square root or a fractional power of a negative quantity?)"
             )
+
+
+def _specialize(system: ControlSystem) -> tuple[tuple[Expr, ...], ...]:
+    subs = [(sp.Symbol(k), exact_decimals(v)) for k, v in system.parameters]
+    return tuple(
+        tuple(exact_decimals(e.subs(subs) if subs else e) for e in f) for f in system.fields
+    )
+
+
+# the specialized fields per system (the system itself holds no state)
+_SPECIALIZED: IdentityMemo[tuple[tuple[Expr, ...], ...]] = IdentityMemo()
