@@ -37,6 +37,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -310,6 +311,12 @@ def exact_regularity(system: ControlSystem, point: tuple[sp.Expr, ...]) -> tuple
     left = budget.seconds_left()
     filt = analyze(system, point, time_budget=min(ANALYSIS_TIME_BUDGET, max(0.5, left)))
     fpoint = np.array([float(v) for v in point])
+    _require_regular(system, filt, fpoint)
+    return tuple(filt.growth_vector)
+
+
+def _require_regular(system: ControlSystem, filt: Any, fpoint: np.ndarray) -> None:
+    """Raise unless ``filt`` (the filtration at ``fpoint``) is bracket generating and regular."""
     if not filt.bracket_generating:
         raise NotBracketGeneratingError(
             f"{system.name} is not bracket generating at {_fmt(fpoint)}"
@@ -319,7 +326,6 @@ def exact_regularity(system: ControlSystem, point: tuple[sp.Expr, ...]) -> tuple
             f"{_fmt(fpoint)} is a singular point of {system.name} "
             f"(growth {tuple(filt.growth_vector)}, generic {tuple(filt.generic_growth_vector)})"
         )
-    return tuple(filt.growth_vector)
 
 
 @lru_cache(maxsize=32)
@@ -329,15 +335,7 @@ def _symbolic_model(system: ControlSystem, point: tuple[sp.Expr, ...]) -> LocalM
     approx = approximate(system, point)
     filt = approx.filtration
     fpoint = np.array([float(v) for v in point])
-    if not filt.bracket_generating:
-        raise NotBracketGeneratingError(
-            f"{system.name} is not bracket generating at {_fmt(fpoint)}"
-        )
-    if not filt.regular:
-        raise SingularPointError(
-            f"{_fmt(fpoint)} is a singular point of {system.name} "
-            f"(growth {tuple(filt.growth_vector)}, generic {tuple(filt.generic_growth_vector)})"
-        )
+    _require_regular(system, filt, fpoint)
     names = tuple(approx.coordinates.names)
     tri = TriangularSystem.from_fields(approx.fields, names, tuple(filt.weights))
     params: dict[str | sp.Symbol, sp.Expr] = {sp.Symbol(k): v for k, v in system.parameters}
