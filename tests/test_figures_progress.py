@@ -291,3 +291,11 @@ def test_a_callable_needs_a_duration():
 
     with pytest.raises(OptionError, match="duration"):
         as_signal(lambda t: [0.0, 0.0], 2)
+
+
+@pytest.mark.parametrize("command", ["analyze", "approximate", "simulate", "scaling", "sweep",
+                                     "plan", "execute", "reproduce", "models"])
+def test_every_command_help_names_the_global_flags(run_cli, command):
+    status, out, _ = run_cli(command, "--help")
+    assert status == 0
+    assert "--quiet" in out and "--debug" in out

@@ -35,7 +35,24 @@ from nilpotent.errors import (
 from nilpotent.outputs import check_writable, write_atomically
 from nilpotent.strict_json import json_safe, json_text  # noqa: F401  (re-exported)
 
-app = typer.Typer(
+#: Shown at the end of every command's ``--help``: the flags :func:`nilpotent.cli.main`
+#: reads wherever they stand on the command line.
+GLOBAL_FLAGS_HELP = (
+    "Anywhere on the command line: --quiet (no progress on stderr), --debug (the "
+    "traceback of an internal error). Exit status: 0 done, 2 a user mistake, 70 a bug, "
+    "130/143 interrupted (execute: 3 when the goal is not reached)."
+)
+
+
+class _Commands(typer.Typer):
+    """typer's app whose every command's help ends with :data:`GLOBAL_FLAGS_HELP`."""
+
+    def command(self, *args: Any, **kwargs: Any) -> Any:  # type: ignore[override]
+        kwargs.setdefault("epilog", GLOBAL_FLAGS_HELP)
+        return super().command(*args, **kwargs)
+
+
+app = _Commands(
     name="nilpotent",
     help=(
         "Geometric control of driftless (nonholonomic) systems: growth vector, "
