@@ -27,8 +27,9 @@ Two builders (registry :data:`BUILDERS`):
     coordinate maps compiled by :func:`nilpotent.numeric.compile.compile_map`.
 
 Regularity is checked numerically: the growth vector at ``p`` (ranks of the
-fields and of fields plus brackets, relative singular-value tolerance
-:data:`RANK_TOL`) must equal the one at random points nearby; otherwise
+fields and of fields plus brackets, decided by the one float-rank engine
+:func:`nilpotent.core.decide.numeric_rank`: scale-free, relative tolerance)
+must equal the one at random points nearby; otherwise
 :class:`~nilpotent.errors.SingularPointError`.
 """
 
@@ -47,9 +48,6 @@ from nilpotent.errors import NotBracketGeneratingError, PlanningError, SingularP
 from nilpotent.numeric.compile import CompiledSystem, compile_map, compile_system
 from nilpotent.numeric.types import State
 from nilpotent.planning.triangular import TriangularSystem
-
-#: Relative tolerance on singular values deciding numerical ranks.
-RANK_TOL = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,9 +79,11 @@ class LocalModel:
 
 
 def _rank(mat: np.ndarray) -> int:
-    from nilpotent.core.decide.spans import numeric_rank  # the one rank engine (scale-invariant)
+    """Rank of the columns of ``mat`` by the one float-rank engine (scale-free: each column
+    normalised, relative tolerance ``FLOAT_RELATIVE_TOLERANCE``)."""
+    from nilpotent.core.decide import numeric_rank  # the one float-rank engine
 
-    return numeric_rank(mat.T.tolist(), RANK_TOL) if mat.size else 0
+    return numeric_rank(mat.T.tolist()) if mat.size else 0
 
 
 def _values(compiled: CompiledSystem, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

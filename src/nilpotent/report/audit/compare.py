@@ -4,8 +4,8 @@ Two expressions are equal when their difference vanishes at several random
 rational points evaluated with 30 significant digits (a nonzero value there
 proves a difference) *and* sympy cannot show it is nonzero.  Fields are
 printed in the expression grammar with ``∂`` names; printed LaTeX is shown with
-its layout commands removed.  :func:`numeric_rank` is the audit's one rank
-computation (30-digit evaluation of exact algebraic vectors).
+its layout commands removed.  Ranks are not decided here: the audit calls the
+one rank engine, :func:`nilpotent.core.decide.rank`.
 """
 
 from __future__ import annotations
@@ -28,7 +28,6 @@ __all__ = [
     "fmt_vec",
     "format_field",
     "matrix_text",
-    "numeric_rank",
     "printed_field",
     "printed_matrix",
     "proportional",
@@ -161,16 +160,6 @@ def push_forward(
         col = jac * sp.Matrix([as_expr(c) for c in f])
         out.append(tuple(sp.expand(as_expr(c).subs(inverse, simultaneous=True)) for c in col))
     return tuple(out)
-
-
-def numeric_rank(vectors: Sequence[Sequence[sp.Expr]]) -> int:
-    """Rank of exact vectors (the span of brackets at the origin) by the one rank engine.
-
-    :func:`nilpotent.core.decide.spans.rank` (certified; a random point for symbolic entries).
-    """
-    from nilpotent.core.decide.spans import rank  # the one rank engine
-
-    return rank(vectors, probabilistic=True)[0]
 
 
 def matrix_text(m: sp.MatrixBase) -> str:

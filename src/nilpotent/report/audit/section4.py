@@ -7,6 +7,7 @@ from collections.abc import Iterable, Sequence
 
 import sympy as sp
 
+from nilpotent.core.decide import rank
 from nilpotent.core.lie.brackets import bracket
 from nilpotent.core.model.expressions import as_expr
 from nilpotent.report.audit.compare import (
@@ -14,7 +15,6 @@ from nilpotent.report.audit.compare import (
     fmt_rate,
     fmt_vec,
     format_field,
-    numeric_rank,
     printed_field,
     proportional,
     same_exprs,
@@ -176,7 +176,9 @@ def check_vf(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
         for a, b in ((0, 1), (1, 2), (0, 2)):
             bb = bracket(brs[a], brs[b], sys.coordinates)
             extra.append([as_expr(v).subs(list(point.items())) for v in bb])
-        ranks[name] = (numeric_rank(vals), numeric_rank(vals + extra))
+        ranks[name] = (
+            rank(vals, probabilistic=True)[0], rank(vals + extra, probabilistic=True)[0]
+        )
     involutive = {name: r[0] == r[1] for name, r in ranks.items()}
     same = involutive["vf"] == involutive["Section 4"]
     yield make_entry(
