@@ -266,3 +266,13 @@ def test_step_3_plan_reports_a_null_lower_bound_with_a_reason(run_cli) -> None:
     assert out["length"] > 0
     assert out["lower_bound"] is None and out["length_ratio"] is None
     assert "step" in out["null_reasons"]["lower_bound"]
+
+
+def test_step_3_objective_length_plan_is_refused_naming_the_step(run_cli) -> None:
+    # the global planner used to swallow the step refusal of each piece and halve pieces
+    # down to 1e-3, ending with a misleading "cannot steer inside the free space" message
+    status, stdout, stderr = run_cli("plan", "engel", "--to", "x1=1/10,x4=1/20",
+                                     "--objective", "length", "--time-limit", "60")
+    assert status == 2
+    assert "step <= 2" in stdout + stderr
+    assert "free space" not in stdout + stderr
