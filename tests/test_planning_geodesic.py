@@ -276,3 +276,15 @@ def test_step_3_objective_length_plan_is_refused_naming_the_step(run_cli) -> Non
     assert status == 2
     assert "step <= 2" in stdout + stderr
     assert "free space" not in stdout + stderr
+
+
+def test_arc_angle_of_a_tiny_area_is_not_lost_to_cancellation() -> None:
+    # (θ − sin θ)/(8 sin²(θ/2)) = θ/12 + O(θ³): for q = 1e-12 the angle is 1.2e-11; with
+    # θ − sin θ evaluated in doubles it came out ~1e-8 (θ − sin θ rounds to 0 below that)
+    from nilpotent.planning.geodesic import _arc_angle
+
+    for q in (1e-12, 1e-9, 1e-6):
+        assert _arc_angle(q) == pytest.approx(12 * q, rel=1e-6)
+    theta = _arc_angle(0.3)
+    ratio = (theta - math.sin(theta)) / (8 * math.sin(theta / 2) ** 2)
+    assert ratio == pytest.approx(0.3, rel=1e-12)
