@@ -266,3 +266,25 @@ def test_step_3_plan_reports_a_null_lower_bound_with_a_reason(run_cli) -> None:
     assert out["length"] > 0
     assert out["lower_bound"] is None and out["length_ratio"] is None
     assert "step" in out["null_reasons"]["lower_bound"]
+
+
+def test_step_3_objective_length_plan_is_refused_naming_the_step(run_cli) -> None:
+    # the global planner used to swallow the step refusal of each piece and halve pieces
+    # down to 1e-3, ending with a misleading "cannot steer inside the free space" message
+    status, stdout, stderr = run_cli("plan", "engel", "--to", "x1=1/10,x4=1/20",
+                                     "--objective", "length", "--time-limit", "60")
+    assert status == 2
+    assert "step <= 2" in stdout + stderr
+    assert "free space" not in stdout + stderr
+
+
+def test_arc_angle_of_a_tiny_area_is_not_lost_to_cancellation() -> None:
+    # (θ − sin θ)/(8 sin²(θ/2)) = θ/12 + O(θ³): for q = 1e-12 the angle is 1.2e-11; with
+    # θ − sin θ evaluated in doubles it came out ~1e-8 (θ − sin θ rounds to 0 below that)
+    from nilpotent.planning.geodesic import _arc_angle
+
+    for q in (1e-12, 1e-9, 1e-6):
+        assert _arc_angle(q) == pytest.approx(12 * q, rel=1e-6)
+    theta = _arc_angle(0.3)
+    ratio = (theta - math.sin(theta)) / (8 * math.sin(theta / 2) ** 2)
+    assert ratio == pytest.approx(0.3, rel=1e-12)

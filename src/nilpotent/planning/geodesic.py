@@ -347,12 +347,27 @@ def _starts(st: Step2Structure, ys: np.ndarray, yg: np.ndarray) -> list[np.ndarr
     return starts
 
 
+def _theta_minus_sin(theta: float) -> float:
+    """``θ − sin θ`` without cancellation (its Taylor series below 0.5: ``θ³/6 − θ⁵/120 + …``).
+
+    In doubles ``θ − sin θ`` is 0 for ``θ ≲ 1e-8``, which made :func:`_arc_angle`
+    return ~1e-8 for goals with a tiny vertical displacement (``θ ≈ 12q``).
+    """
+    if abs(theta) >= 0.5:
+        return theta - math.sin(theta)
+    t2, term, total = theta * theta, theta**3 / 6, 0.0
+    for k in range(1, 12):  # θ^(2k+1)/(2k+1)! with alternating signs; 0.5^25/25! ~ 1e-33
+        total += term
+        term *= -t2 / ((2 * k + 2) * (2 * k + 3))
+    return total
+
+
 def _arc_angle(q: float) -> float:
     """``θ ∈ (0, 2π)`` with ``(θ − sin θ) / (8 sin²(θ/2)) = q > 0`` (increasing in θ)."""
     lo, hi = 0.0, 2 * math.pi
     for _ in range(60):
         mid = (lo + hi) / 2
-        val = (mid - math.sin(mid)) / (8 * math.sin(mid / 2) ** 2) if mid > 0 else 0.0
+        val = _theta_minus_sin(mid) / (8 * math.sin(mid / 2) ** 2) if mid > 0 else 0.0
         lo, hi = (mid, hi) if val < q else (lo, mid)
     return (lo + hi) / 2
 

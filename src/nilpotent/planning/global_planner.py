@@ -57,6 +57,7 @@ from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
+from nilpotent.planning.nilpotent import StepTooHighError
 from nilpotent.planning.simulation import simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
@@ -335,6 +336,8 @@ def steer_admissible(
         if endpoints_singular_raise and not str(exc).startswith("the path meets"):
             raise
         return None
+    except StepTooHighError:
+        raise  # the objective does not apply to this system: no smaller piece helps
     except (PlanningError, IntegrationError):
         return None
     states = p.trajectory.states

@@ -48,7 +48,7 @@ from nilpotent.planning.controls import (
 )
 from nilpotent.planning.length import length_report, method_for
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
-from nilpotent.planning.nilpotent import steer_nilpotent
+from nilpotent.planning.nilpotent import StepTooHighError, steer_nilpotent
 from nilpotent.planning.simulation import simulate_candidates, simulate_plan, single_engine
 from nilpotent.simulation.trajectory import Trajectory
 from nilpotent.strict_json import json_object
@@ -266,6 +266,8 @@ def _candidates(
         budget.check("steering the nilpotent approximation")
         try:
             steering = steer_nilpotent(tri, np.zeros_like(y_to), y_to, method=method)
+        except StepTooHighError:
+            raise
         except NilpotentError:
             return
         for s in DAMPING:
@@ -276,6 +278,8 @@ def _candidates(
         budget.check("steering the nilpotent approximation")
         try:
             steering = steer_nilpotent(tri, y_from, target, method=method)
+        except StepTooHighError:
+            raise
         except NilpotentError:
             continue
         yield s, list(steering.segments), steering.error

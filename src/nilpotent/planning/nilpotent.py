@@ -64,6 +64,15 @@ from nilpotent.planning.controls import (
 from nilpotent.planning.exact_flow import endpoint, endpoint_and_jacobian
 from nilpotent.planning.triangular import TriangularSystem
 
+
+class StepTooHighError(PlanningError):
+    """A steering method of step ≤ 2 (``"step2"``, ``"geodesic"``) asked of a higher step.
+
+    Not a failure of one steering: callers that retry smaller pieces or other
+    dampings re-raise it, so the user sees this message rather than a
+    "pieces down to ..." refusal.
+    """
+
 #: Base frequency of the loop segments (one period in one time unit).
 LOOP_OMEGA = 2 * math.pi
 #: Target accuracy, relative to the unit-size dilated problem.
@@ -342,8 +351,11 @@ def steer_nilpotent(
     if method not in METHODS:
         raise PlanningError(f"unknown steering method {method!r} (known: {', '.join(METHODS)})")
     if method in ("step2", "geodesic") and system.step > 2:
-        raise PlanningError(
-            f"the {method!r} method needs step <= 2; this system has step {system.step}"
+        what = ("shortest steering (objective 'length', method 'geodesic')"
+                if method == "geodesic" else f"the {method!r} method")
+        raise StepTooHighError(
+            f"{what} needs step <= 2; this nilpotent approximation has step {system.step}"
+            + (" (use objective 'reach')" if method == "geodesic" else "")
         )
     ys = np.asarray(y_start, dtype=float)
     yg = np.asarray(y_goal, dtype=float)
