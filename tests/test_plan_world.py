@@ -146,6 +146,12 @@ def test_model_file_limits_and_geometry_round_trip():
         ({"limits": {"x": [0]}}, "pair"),
         ({"geometry": {"polygons": [{"points": [["x", "y"], ["x", "1"]]}]}}, "at least 3"),
         ({"geometry": {"blobs": []}}, "unknown key"),
+        # a constant of the outline beyond a double (was OverflowError, exit 70) or huge
+        ({"geometry": {"discs": [{"center": ["x", "1" + "0" * 400], "radius": "0.1"}]}},
+         r"center\[1\].*finite"),
+        ({"geometry": {"segments": [{"from": ["x", "y"], "to": ["2e7", "y"]}]}},
+         r"segments\[0\]\.to\[0\].*magnitude"),
+        ({"geometry": {"discs": [{"center": ["x", "y"], "radius": "-1"}]}}, "radius"),
     ],
 )
 def test_model_file_bad_limits_or_geometry(extra, text):
