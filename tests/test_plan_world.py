@@ -535,3 +535,10 @@ def test_doorway_plan_keeps_legs_straight_and_is_verified_independently():
     assert np.linalg.norm(q[-1] - np.array(goal)) <= 1e-6
     assert np.all(np.abs(q[:, 3:6]) <= 5 * math.pi / 6 + 1e-9)
     assert independent_collision_free(q, DOORWAY)
+
+
+def test_outline_constant_bound_is_the_point_magnitude():
+    from nilpotent.core.model.outline import MAX_CONSTANT
+    from nilpotent.core.model.points import MAX_MAGNITUDE
+
+    assert MAX_CONSTANT == MAX_MAGNITUDE

@@ -102,6 +102,11 @@ class Limits:
                 )
 
 
+#: Largest magnitude of a constant of an outline (that of a point's coordinate,
+#: :data:`nilpotent.core.model.points.MAX_MAGNITUDE`, which imports this module).
+MAX_CONSTANT = 1e6
+
+
 def _short(value: object, limit: int = 60) -> str:
     text = str(value)
     return text if len(text) <= limit else text[:limit] + "..."
@@ -128,7 +133,7 @@ class Outline:
     ModelError
         A polygon with fewer than 3 points, an empty outline, a constant (a point's
         coordinate, a radius) that is not finite or of magnitude above
-        :data:`nilpotent.core.model.points.MAX_MAGNITUDE`, or a disc whose radius
+        :data:`MAX_CONSTANT`, or a disc whose radius
         is a constant that is negative (a radius that depends on the
         configuration is checked where it is evaluated,
         :class:`nilpotent.planning.robot.Robot`).
@@ -144,8 +149,6 @@ class Outline:
                 raise ModelError(f"geometry.polygons[{i}] needs at least 3 points, got {len(poly)}")
         if not (self.polygons or self.segments or self.discs):
             raise ModelError("geometry: the outline is empty (give polygons, segments or discs)")
-        from nilpotent.core.model.points import MAX_MAGNITUDE  # (points imports the model)
-
         radii = {f"geometry.discs[{i}].radius" for i in range(len(self.discs))}
         for label, expr in zip(self.labels(), self.expressions(), strict=True):
             r = as_expr(expr)
@@ -158,10 +161,10 @@ class Outline:
             if label in radii and not (math.isfinite(value) and value >= 0):
                 raise ModelError(
                     f"{label} = {_short(r)}: a radius must be a finite number >= 0")
-            if not (math.isfinite(value) and abs(value) <= MAX_MAGNITUDE):
+            if not (math.isfinite(value) and abs(value) <= MAX_CONSTANT):
                 raise ModelError(
                     f"{label} = {_short(r)}: a constant of the outline must be a finite number "
-                    f"of magnitude at most {MAX_MAGNITUDE:g}")
+                    f"of magnitude at most {MAX_CONSTANT:g}")
 
     def expressions(self) -> tuple[sp.Expr, ...]:
         """Every expression of the outline, in a fixed order (polygons, segments, discs)."""
