@@ -146,6 +146,12 @@ def test_model_file_limits_and_geometry_round_trip():
         ({"limits": {"x": [0]}}, "pair"),
         ({"geometry": {"polygons": [{"points": [["x", "y"], ["x", "1"]]}]}}, "at least 3"),
         ({"geometry": {"blobs": []}}, "unknown key"),
+        # a constant of the outline beyond a double (was OverflowError, exit 70) or huge
+        ({"geometry": {"discs": [{"center": ["x", "1" + "0" * 400], "radius": "0.1"}]}},
+         r"center\[1\].*finite"),
+        ({"geometry": {"segments": [{"from": ["x", "y"], "to": ["2e7", "y"]}]}},
+         r"segments\[0\]\.to\[0\].*magnitude"),
+        ({"geometry": {"discs": [{"center": ["x", "y"], "radius": "-1"}]}}, "radius"),
     ],
 )
 def test_model_file_bad_limits_or_geometry(extra, text):
@@ -529,3 +535,10 @@ def test_doorway_plan_keeps_legs_straight_and_is_verified_independently():
     assert np.linalg.norm(q[-1] - np.array(goal)) <= 1e-6
     assert np.all(np.abs(q[:, 3:6]) <= 5 * math.pi / 6 + 1e-9)
     assert independent_collision_free(q, DOORWAY)
+
+
+def test_outline_constant_bound_is_the_point_magnitude():
+    from nilpotent.core.model.outline import MAX_CONSTANT
+    from nilpotent.core.model.points import MAX_MAGNITUDE
+
+    assert MAX_CONSTANT == MAX_MAGNITUDE

@@ -111,6 +111,16 @@ def test_heisenberg_special_goals() -> None:
         assert geo.error < 1e-12
 
 
+def test_heisenberg_tiny_goals_do_not_underflow_the_dilation() -> None:
+    # a horizontal goal 1e-200 away: the dilation's scale² (1e-400) underflows to 0
+    # when formed as a power; the geodesic is the straight segment of length |x|
+    for goal in [(1e-200, 0.0, 0.0), (0.0, -3e-170, 0.0), (5e-324, 0.0, 0.0)]:
+        geo = shortest_geodesic(HEIS, (0, 0, 0), goal)
+        assert math.isfinite(geo.length)
+        assert geo.length == pytest.approx(math.hypot(goal[0], goal[1]), rel=1e-6)
+        assert geo.error <= 1e-12 * max(abs(g) for g in goal)
+
+
 def test_heisenberg_from_a_start_off_the_origin() -> None:
     # left translation by p: (p1, p2, p3)·(a, b, c) = (p1+a, p2+b, p3+c+(p1 b − p2 a)/2)
     p = np.array([0.4, -1.1, 0.3])

@@ -85,3 +85,18 @@ def test_numeric_model_refuses_step_3_and_singular_points():
         numeric_model(get_model("engel"), (0, 0, 0, 0))
     with pytest.raises(SingularPointError):
         numeric_model(get_model("martinet"), (0, 0, 0))
+
+
+def test_numeric_model_refuses_a_frame_of_subnormal_size():
+    # theta' = 1e-320 u2: growth (2,3) in exact arithmetic, but the adapted frame's
+    # inverse (~1e320) overflows a double; a clear PlanningError, never a NaN model
+    # (NaN reached LAPACK, which printed on stdout and failed as LinAlgError, exit 70)
+    from nilpotent.core.model.modelfile import system_from_dict
+
+    tiny = system_from_dict({
+        "name": "tiny-turn",
+        "coordinates": ["x", "y", "theta"],
+        "fields": [{"x": "cos(theta)", "y": "sin(theta)"}, {"theta": "1e-320"}],
+    })
+    with pytest.raises(PlanningError, match="double precision"):
+        numeric_model(tiny, (0.0, 0.0, 0.0))

@@ -490,8 +490,11 @@ def shortest_geodesic(
     scale = max(scale, float(np.max(np.abs(ys) ** (1.0 / weights))))
     if scale == 0.0 or np.array_equal(ys, yg):
         return Geodesic((0.0,) * st.m, (0.0,) * n2, 0.0, tuple(ys), 0.0, 1)
-    us = ys / scale**weights
-    ug = yg / scale**weights
+    # divide once per unit of weight: scale**2 underflows to 0 for a scale below
+    # ~1e-154 (a goal 1e-200 away), while each quotient stays at most 1 in size
+    us, ug = ys / scale, yg / scale
+    us[list(st.v_index)] /= scale
+    ug[list(st.v_index)] /= scale
     best: tuple[float, np.ndarray, float] | None = None
     converged = 0
     first = _first_guess(st, us, ug)

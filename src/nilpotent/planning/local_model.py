@@ -35,6 +35,7 @@ must equal the one at random points nearby; otherwise
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -191,7 +192,8 @@ def numeric_model(system: ControlSystem, point: Sequence[object] | State) -> Loc
     SingularPointError
         The growth vector at the point differs from the generic one nearby.
     PlanningError
-        The step at the point is more than 2 (use the ``"symbolic"`` builder).
+        The step at the point is more than 2 (use the ``"symbolic"`` builder), or the
+        adapted frame or the approximation is not representable in double precision.
     """
     compiled = compiled_system(system)
     p = np.array([float(v) for v in point])  # type: ignore[arg-type]
@@ -222,6 +224,11 @@ def numeric_model(system: ControlSystem, point: Sequence[object] | State) -> Loc
             frame.append(col)
     f = np.array(frame).T
     a = np.linalg.inv(f)
+    if not np.all(np.isfinite(a)):  # a frame of subnormal size (a field ~1e-320)
+        raise PlanningError(
+            f"the adapted frame of {system.name} at {_fmt(p)} cannot be inverted in double "
+            "precision (its entries are too small or too large); rescale the model's fields"
+        )
     weights = tuple([1] * n1 + [2] * (n - n1))
     names = tuple(f"y{j + 1}" for j in range(n))
     jac = compiled.jacobian(p)[0]
@@ -242,6 +249,11 @@ def numeric_model(system: ControlSystem, point: Sequence[object] | State) -> Loc
                     )
                 )
         terms.append(tuple(row))
+    if not all(math.isfinite(c) for row in terms for entry in row for c, _ in entry):
+        raise PlanningError(
+            f"the nilpotent approximation of {system.name} at {_fmt(p)} overflows double "
+            "precision; rescale the model's fields"
+        )
     tri = TriangularSystem(names, weights, tuple(terms))
 
     def forward(x: np.ndarray) -> np.ndarray:

@@ -142,6 +142,16 @@ class Limits:
                                  "(it must depend on the coordinates)")
 
 
+#: Largest magnitude of a constant of an outline (that of a point's coordinate,
+#: :data:`nilpotent.core.model.points.MAX_MAGNITUDE`, which imports this module).
+MAX_CONSTANT = 1e6
+
+
+def _short(value: object, limit: int = 60) -> str:
+    text = str(value)
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
 @dataclass(frozen=True)
 class Outline:
     """A robot's outline in the plane; every number is a sympy expression.
@@ -167,8 +177,10 @@ class Outline:
     Raises
     ------
     ModelError
-        A polygon with fewer than 3 points, an empty outline, or a disc whose radius
-        is a constant that is negative or not finite (a radius that depends on the
+        A polygon with fewer than 3 points, an empty outline, a constant (a point's
+        coordinate, a radius) that is not finite or of magnitude above
+        :data:`MAX_CONSTANT`, or a disc whose radius
+        is a constant that is negative (a radius that depends on the
         configuration is checked where it is evaluated,
         :class:`nilpotent.planning.robot.Robot`); ``bodies`` not one per part, a
         self-collision pair naming an unknown body, a body twice, or given twice.
@@ -186,17 +198,22 @@ class Outline:
                 raise ModelError(f"geometry.polygons[{i}] needs at least 3 points, got {len(poly)}")
         if not (self.polygons or self.segments or self.discs):
             raise ModelError("geometry: the outline is empty (give polygons, segments or discs)")
-        for i, (_, radius) in enumerate(self.discs):
-            r = as_expr(radius)
+        radii = {f"geometry.discs[{i}].radius" for i in range(len(self.discs))}
+        for label, expr in zip(self.labels(), self.expressions(), strict=True):
+            r = as_expr(expr)
             if r.free_symbols:
                 continue
             try:
                 value = float(r)
             except (TypeError, ValueError, OverflowError):
                 value = math.nan
-            if not (math.isfinite(value) and value >= 0):
+            if label in radii and not (math.isfinite(value) and value >= 0):
                 raise ModelError(
-                    f"geometry.discs[{i}].radius = {r}: a radius must be a finite number >= 0")
+                    f"{label} = {_short(r)}: a radius must be a finite number >= 0")
+            if not (math.isfinite(value) and abs(value) <= MAX_CONSTANT):
+                raise ModelError(
+                    f"{label} = {_short(r)}: a constant of the outline must be a finite number "
+                    f"of magnitude at most {MAX_CONSTANT:g}")
         count = len(self.polygons) + len(self.segments) + len(self.discs)
         if self.bodies and len(self.bodies) != count:
             raise ModelError(f"geometry: {len(self.bodies)} body names for {count} parts "
