@@ -360,3 +360,22 @@ def test_the_number_of_pieces_of_a_global_path_is_bounded():
     assert len(gp._densify(path, 0.5)) == 1 + 10 + 24
     with pytest.raises(ComputationLimitError, match="--max-piece"):
         gp._densify(path, 17 / (gp.MAX_PIECES + 1) * 0.999)
+
+
+@pytest.mark.parametrize("args", [
+    ("plan", "unicycle", "--to", "x=0.1", "--to", "x=0.2"),
+    ("analyze", "unicycle", "--at", "x=1", "--at=x=2"),
+    ("sweep", "unicycle", "--bracket", "1,2", "--seed", "1", "--seed", "2"),
+])
+def test_a_single_valued_option_given_twice_is_refused(run_cli, args):
+    """click keeps the last of two values silently; the CLI refuses the ambiguity."""
+    status, out, err = run_cli(*args, "--json")
+    assert status == 2 and "Traceback" not in err
+    error = json.loads(out)["error"]
+    assert error["kind"] == "usage" and "given twice" in error["message"]
+
+
+def test_a_repeatable_option_may_be_repeated(run_cli):
+    status, out, _ = run_cli("analyze", "unicycle", "--param", "a=1", "--param", "b=2",
+                             "--json")
+    assert "given twice" not in out

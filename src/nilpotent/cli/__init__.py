@@ -155,6 +155,26 @@ def main(argv: Sequence[str] | None = None) -> int:
             interrupts.uninstall()
 
 
+def _repeated_option(command: object, args: list[str]) -> str | None:
+    """The first single-valued option of the subcommand ``args[0]`` that ``args`` gives
+    more than once (``--to x=1 --to x=2``: click would keep the last silently), else None."""
+    commands = getattr(command, "commands", {})
+    sub = commands.get(args[0]) if args else None
+    if sub is None:
+        return None
+    rest = args[1 : args.index("--")] if "--" in args else args[1:]
+    for param in sub.params:
+        # duck-typed: typer may carry its own copy of click's classes
+        if getattr(param, "param_type_name", "") != "option" or param.multiple or getattr(
+                param, "is_flag", False):
+            continue
+        names = param.opts + param.secondary_opts
+        seen = sum(1 for a in rest for n in names if a == n or a.startswith(n + "="))
+        if seen > 1:
+            return names[0]
+    return None
+
+
 def _run_command(args: list[str], flags: set[str], as_json: bool) -> int:
     from nilpotent import progress
 
@@ -167,6 +187,11 @@ def _run_command(args: list[str], flags: set[str], as_json: bool) -> int:
         return EXIT_USAGE
     try:
         command = typer.main.get_command(app)
+        twice = _repeated_option(command, args)
+        if twice is not None:
+            report_error("usage", f"option {twice} given twice: give it once (a second "
+                         "value would silently replace the first)", as_json)
+            return EXIT_USAGE
         result = command.main(args=args, prog_name="nilpotent", standalone_mode=False)
         code = int(result) if isinstance(result, int) else 0
         if interrupts.pending() is not None or code == EXIT_INTERRUPTED:
