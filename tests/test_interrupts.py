@@ -248,3 +248,35 @@ def test_a_deferred_block_is_never_cut(handlers):
 def test_checkpoints_are_free_without_handlers():
     interrupts.checkpoint()  # library use: nothing installed, nothing raised
     assert interrupts.pending() is None
+
+
+def test_an_interrupt_raised_where_python_cannot_propagate_it_prints_nothing(capsys):
+    """A signal handled inside a weakref callback or ``__del__`` (the garbage collector
+    runs them at any moment) raises where Python can only report it as "Exception
+    ignored in": while the handlers are installed that report is dropped (the record
+    stays, and the retry thread delivers the interrupt again); other unraisable
+    exceptions are still reported."""
+    import types
+
+    from nilpotent import interrupts
+
+    owned = interrupts.install()
+    try:
+        hook = sys.unraisablehook
+        hook(types.SimpleNamespace(exc_type=interrupts.Terminated,
+                                   exc_value=interrupts.Terminated(), exc_traceback=None,
+                                   err_msg=None, object=None))
+        assert capsys.readouterr().err == ""
+        seen = []
+        previous = interrupts._state["unraisablehook"]  # what was there before install
+        interrupts._state["unraisablehook"] = seen.append
+        try:
+            other = types.SimpleNamespace(exc_type=ValueError, exc_value=ValueError("x"),
+                                          exc_traceback=None, err_msg=None, object=None)
+            hook(other)
+        finally:
+            interrupts._state["unraisablehook"] = previous
+        assert seen == [other]
+    finally:
+        if owned:
+            interrupts.uninstall()

@@ -134,9 +134,24 @@ def install() -> bool:
             _previous[signum] = signal.signal(signum, _handler)
         except (ValueError, OSError):  # pragma: no cover - not the main interpreter
             continue
+    if sys.unraisablehook is not _quiet_unraisable:
+        _state["unraisablehook"] = sys.unraisablehook
+        sys.unraisablehook = _quiet_unraisable
     with contextlib.suppress(AttributeError, ValueError, OSError):
         signal.pthread_sigmask(signal.SIG_UNBLOCK, SIGNALS)
     return bool(_previous)
+
+
+def _quiet_unraisable(unraisable: object) -> None:
+    """``sys.unraisablehook`` while the handlers are installed: an :class:`Interrupted`
+    raised where Python cannot propagate it (a weakref callback, ``__del__``, run by the
+    garbage collector at any moment) is dropped without a traceback on stderr: the
+    record stays and the retry thread delivers it again at the next safe point.  Every
+    other unraisable exception goes to the hook that was there before."""
+    if isinstance(getattr(unraisable, "exc_value", None), Interrupted):
+        return
+    previous = _state.get("unraisablehook") or sys.__unraisablehook__
+    previous(unraisable)  # type: ignore[operator]  # pyright: ignore[reportCallIssue]
 
 
 def uninstall() -> None:
@@ -145,6 +160,9 @@ def uninstall() -> None:
         with contextlib.suppress(ValueError, OSError, TypeError):
             signal.signal(signum, previous)  # type: ignore[arg-type]
         del _previous[signum]
+    if sys.unraisablehook is _quiet_unraisable:
+        hook = _state.get("unraisablehook") or sys.__unraisablehook__
+        sys.unraisablehook = hook  # type: ignore[assignment]  # pyright: ignore
     _state.update(pending=None, closed=True, critical=0)
 
 
