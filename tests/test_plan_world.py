@@ -20,7 +20,6 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from matplotlib.path import Path as MplPath
-from scipy.integrate import solve_ivp
 
 import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
 from nilpotent.core.model.modelfile import system_from_dict, system_to_dict
@@ -31,6 +30,7 @@ from nilpotent.models.trident import TridentGeometry
 from nilpotent.planning.global_planner import plan_global, plan_json
 from nilpotent.planning.verify import Checker
 from nilpotent.planning.world import World, world_from_dict
+from replay import resimulate
 
 ALPHA = (0.0, 2 * math.pi / 3, 4 * math.pi / 3)
 ROOM = Path(__file__).resolve().parents[1] / "src/nilpotent/planning/worlds/room.toml"
@@ -42,34 +42,6 @@ UNICYCLE = {
 
 
 # --- independent re-simulation and geometry ----------------------------------------
-
-def resimulate(system, start, segments, samples: int = 120):
-    """Dense samples (N, n) of the true system under JSON segments (scipy DOP853)."""
-    mat = sp.lambdify([system.coordinates], sp.Matrix(system.specialized_fields).T, "numpy")
-    x = np.asarray(start, dtype=float)
-    out = [x[None, :]]
-    for seg in segments:
-        omega = seg["omega"]
-
-        def u(t, seg=seg, omega=omega):
-            return np.array([
-                inp["constant"]
-                + sum(a * np.cos((k + 1) * omega * t) for k, a in enumerate(inp["cos"]))
-                + sum(b * np.sin((k + 1) * omega * t) for k, b in enumerate(inp["sin"]))
-                for inp in seg["inputs"]
-            ])
-
-        def rhs(t, z, u=u):
-            return np.asarray(mat(z), dtype=float) @ u(t)
-
-        ts = np.linspace(0, seg["duration"], samples)
-        sol = solve_ivp(rhs, (0, seg["duration"]), x, method="DOP853", rtol=1e-12,
-                        atol=1e-13, t_eval=ts)
-        assert sol.success
-        out.append(sol.y.T[1:])
-        x = sol.y[:, -1]
-    return np.vstack(out)
-
 
 def trident_points(q: np.ndarray, r: float = 1.0, l: float = 1.0, per_edge: int = 25):
     """Points on the body's edges, the legs and the wheels (MATH.md §8), and the triangles."""

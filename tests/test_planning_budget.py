@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import sympy as sp
-from scipy.integrate import solve_ivp
 
 import nilpotent.cli.cmd_execute
 import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
@@ -26,6 +25,7 @@ from nilpotent.planning.controls import constant_segment
 from nilpotent.planning.iterative import plan
 from nilpotent.planning.local_model import check_regular, generic_growth, symbolic_model
 from nilpotent.planning.simulation import simulate_candidates
+from replay import resimulate
 
 CASES = Path(__file__).parent / "data" / "cases"  # copies of the published field3 cases
 SNAKE = CASES / "fail-plan-time-limit.toml"
@@ -36,33 +36,6 @@ SNAKE_GOAL = "x=1,y=0.5,theta=0.3,alpha1=1.5707963267948966,alpha2=1.04719755119
 def slack(limit: float) -> float:
     """What a run with ``--time-limit limit`` may take here: ±10 % plus start-up and load."""
     return 1.1 * limit + 15.0
-
-
-def resimulate(system, start, segments, samples: int = 60) -> np.ndarray:
-    """Dense samples (N, n) of the true system under JSON segments (scipy, independent)."""
-    mat = sp.lambdify([system.coordinates], sp.Matrix(system.specialized_fields).T, "numpy")
-    x = np.asarray(start, dtype=float)
-    out = [x[None, :]]
-    for seg in segments:
-        omega = seg["omega"]
-
-        def u(t, seg=seg, omega=omega):
-            return np.array([
-                inp["constant"]
-                + sum(a * np.cos((k + 1) * omega * t) for k, a in enumerate(inp["cos"]))
-                + sum(b * np.sin((k + 1) * omega * t) for k, b in enumerate(inp["sin"]))
-                for inp in seg["inputs"]
-            ])
-
-        def rhs(t, q, u=u):
-            return np.asarray(mat(q), dtype=float) @ u(t)
-
-        ts = np.linspace(0.0, seg["duration"], samples)
-        sol = solve_ivp(rhs, (0.0, seg["duration"]), x, method="DOP853", rtol=1e-11,
-                        atol=1e-12, t_eval=ts)
-        out.append(sol.y.T[1:])
-        x = sol.y[:, -1]
-    return np.vstack(out)
 
 
 # --- the budget itself ---------------------------------------------------------------
