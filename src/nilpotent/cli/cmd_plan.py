@@ -37,6 +37,7 @@ from nilpotent.cli.plan_options import (
     LimitOpt,
     MarginOpt,
     MaxPieceOpt,
+    PlannerOpt,
     SeedOpt,
     TimeLimitOpt,
     ToOpt,
@@ -158,6 +159,7 @@ def plan_command(
     anchor: AnchorOpt = "auto",
     max_iterations: MaxItOpt = 30,
     objective: ObjectiveOpt = "reach",
+    planner: PlannerOpt = "rrtconnect",
     plot: PlotOpt = None,
     animate: AnimateOpt = None,
     json_out: JsonOpt = False,
@@ -173,6 +175,7 @@ def plan_command(
     """
     from nilpotent.planning.iterative import ANCHORS
     from nilpotent.planning.length import OBJECTIVES
+    from nilpotent.planning.optimal_planner import PLANNERS
 
     if not (math.isfinite(tol) and tol > 0):
         raise OptionError(f"--tol must be a positive number, got {tol}")
@@ -184,6 +187,9 @@ def plan_command(
     if objective not in OBJECTIVES:
         raise OptionError(
             f"--objective must be {' or '.join(OBJECTIVES)}; got {literal(objective, 60)!r}")
+    if planner not in PLANNERS:
+        raise OptionError(
+            f"--planner must be {' or '.join(PLANNERS)}; got {literal(planner, 60)!r}")
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
     if not (math.isfinite(max_piece) and max_piece > 0):
@@ -196,7 +202,7 @@ def plan_command(
         result = plan_from_options(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,
-            clearance=clearance, objective=objective,
+            clearance=clearance, objective=objective, planner=planner,
         )
     write_pictures(result, plot, animate)
     if json_out:

@@ -64,6 +64,14 @@ ClearanceOpt = Annotated[
                  parser=bounded_float("--clearance", 0.0)),
 ]
 
+PlannerOpt = Annotated[
+    str,
+    typer.Option("--planner", metavar="NAME",
+                 help="Holonomic stage: rrtconnect (OMPL RRTConnect, shortest Euclidean path; "
+                      "default) or rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
+                      "anytime)."),
+]
+
 SeedOpt = Annotated[
     int,
     typer.Option("--seed", metavar="N", help=f"Seed of the global planner (0 to {MAX_SEED}).",
@@ -126,7 +134,7 @@ def command_budget(time_limit: float):
 
 def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
                       max_piece, *, anchor="auto", max_iterations=30, clearance=0.0,
-                      objective="reach"):
+                      objective="reach", planner="rrtconnect"):
     """Load the world, merge the limits and run the global planner (shared with ``execute``)."""
     from nilpotent.planning.global_planner import plan_global
     from nilpotent.planning.world import load_world
@@ -143,5 +151,5 @@ def plan_from_options(system, start, goal, tol, world, limit, singular_margin, t
         system, start, goal, tol, world=the_world, limits=limits,
         singular_margin=singular_margin, time_limit=time_limit, seed=seed,
         max_piece=max_piece, anchor=anchor, max_iterations=max_iterations, clearance=clearance,
-        objective=objective,
+        objective=objective, planner=planner,
     )

@@ -58,6 +58,7 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
+from nilpotent.planning.optimal_planner import PLANNERS, is_vehicle, optimal_path, reversals
 from nilpotent.planning.simulation import simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
@@ -92,6 +93,8 @@ DENSE_CHECK_POINTS = 200
 #: The direct attempt (one nilpotent plan, the old behaviour) is made for goals this close
 #: (configuration-space Euclidean distance).
 DIRECT_RADIUS = 2.0
+#: ``planner="rrtstar"``: the share of its time that RRT* spends improving its first path.
+IMPROVE_FRACTION = 0.5
 #: Configurations checked at once along a straight chord (memory).
 CHORD_CHUNK = 20_000
 
@@ -139,6 +142,10 @@ class GlobalPlan(PlanFigure):
     clearance_required:
         The distance robot–obstacles the motion had to exceed (``clearance`` of
         :func:`plan_global`; model length units).
+    planner, path_cost, cost_history:
+        The holonomic stage's planner (:data:`~nilpotent.planning.optimal_planner.PLANNERS`);
+        for ``"rrtstar"`` the ball–box cost of its path and the best cost after each of its
+        slices (``(seconds, cost)``; :mod:`nilpotent.planning.optimal_planner`).
     """
 
     plan: Plan
@@ -153,6 +160,9 @@ class GlobalPlan(PlanFigure):
     time_limit: float = math.inf
     seconds: float = field(default=0.0)
     clearance_required: float = 0.0
+    planner: str = "rrtconnect"
+    path_cost: float | None = None
+    cost_history: tuple[tuple[float, float], ...] = ()
 
     @property
     def error(self) -> float:
@@ -180,6 +190,10 @@ class GlobalPlan(PlanFigure):
             reasons["clearance"] = "no world given: no obstacles to measure against"
         if v.self_clearance is None:
             reasons["self_clearance"] = f"model {self.plan.system.name} names no body pairs"
+        if self.path_cost is None:
+            reasons["path_cost"] = "the holonomic stage (rrtconnect, or none) has no cost"
+        if not is_vehicle(self.plan.system):
+            reasons["reversals"] = f"model {self.plan.system.name} has no drive input"
         if v.min_singular_margin is None:
             reasons["min_singular_margin"] = f"model {self.plan.system.name} defines no " \
                 "singular margin"
@@ -197,6 +211,11 @@ class GlobalPlan(PlanFigure):
             "clearance_required": self.clearance_required,
             "route": self.route,
             "planner_seconds": self.planner_seconds,
+            "planner": self.planner,
+            "path_cost": self.path_cost,
+            "cost_history": [list(c) for c in self.cost_history],
+            "reversals": (reversals(self.plan.segments)
+                          if is_vehicle(self.plan.system) else None),
             "seconds": self.seconds,
             "pieces": [
                 {"target": list(p.target), "first_segment": p.first_segment,
@@ -244,12 +263,16 @@ def shape_held_path(
     seed: int | None,
     valid: Callable[[np.ndarray], np.ndarray],
     held: Sequence[int],
+    path_fn: Callable[..., list[np.ndarray]] = ompl_path,
+    chord: bool = True,
 ) -> list[np.ndarray]:
     """A path that moves the other coordinates with the ``held`` (shape) ones at the start's
     values, then changes the shape to the goal's at the goal's pose (a last straight chord).
 
     OMPL then samples only the body pose (a lower-dimensional, easier query), and the
     steered pieces need no shape correction on the way: only the last piece does.
+    ``path_fn``: the OMPL stage (:func:`ompl_path`, or one with its signature);
+    ``chord``: a free straight chord to the goal's pose is the path (no OMPL).
 
     Raises
     ------
@@ -264,10 +287,10 @@ def shape_held_path(
         raise PlanningError("the goal's pose with the start's shape is not admissible")
     if not _chord_valid(valid, xe, xg):
         raise PlanningError("the shape cannot change at the goal's pose")
-    if _chord_valid(valid, x0, xe):
+    if chord and _chord_valid(valid, x0, xe):
         path = [x0.copy(), xe]
     else:
-        path = ompl_path(checker, x0, xe, seconds, seed, valid=valid, held=held)
+        path = path_fn(checker, x0, xe, seconds, seed, valid=valid, held=held)
     if float(np.linalg.norm(xg - xe)) > 0.0:
         path.append(xg.copy())
     return path
@@ -374,6 +397,7 @@ def plan_global(
     path_clearance: float = PATH_CLEARANCE,
     hold_shape: bool = True,
     objective: str = "reach",
+    planner: str = "rrtconnect",
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -423,6 +447,11 @@ def plan_global(
         The local steering's objective, ``"reach"`` or ``"length"``
         (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
         :func:`~nilpotent.planning.iterative.plan`).
+    planner:
+        The holonomic stage: ``"rrtconnect"`` (OMPL RRTConnect, shortest Euclidean path
+        after simplification; a straight chord when it is free) or ``"rrtstar"`` (OMPL
+        RRT* under the sub-Riemannian ball–box cost, anytime: it improves its path for a
+        quarter of the time left after its first; :mod:`nilpotent.planning.optimal_planner`).
 
     Raises
     ------
@@ -443,7 +472,8 @@ def plan_global(
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
             max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
-            path_clearance=path_clearance, hold_shape=hold_shape, objective=objective)
+            path_clearance=path_clearance, hold_shape=hold_shape, objective=objective,
+            planner=planner)
 
 
 def _plan_global(
@@ -466,8 +496,11 @@ def _plan_global(
     path_clearance: float,
     hold_shape: bool,
     objective: str,
+    planner: str = "rrtconnect",
 ) -> GlobalPlan:
     t0 = time.perf_counter()
+    if planner not in PLANNERS:
+        raise OptionError(f"unknown planner {planner!r} (choose from {', '.join(PLANNERS)})")
     if not (tol > 0 and math.isfinite(tol)):
         raise OptionError(f"tol must be a positive number, got {tol}")
     if not (max_piece > 0 and math.isfinite(max_piece)):
@@ -514,7 +547,9 @@ def _plan_global(
         return GlobalPlan(whole, world, checker.limits, singular_margin,  # type: ignore[arg-type]
                           tuple(tuple(float(c) for c in w) for w in waypoints), tuple(pieces),
                           v, route, planner_s, time_limit, time.perf_counter() - t0,
-                          checker.clearance)
+                          checker.clearance, planner,
+                          found[-1].cost if found else None,
+                          found[-1].cost_history if found else ())
 
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
@@ -529,10 +564,20 @@ def _plan_global(
                 pass
     # 2. a path in configuration space, with room around it where possible
     planner_s = 0.0
+    found: list[Any] = []  # rrtstar: its OptimalPath
+
+    def path_fn(*args: Any, **kwargs: Any) -> list[np.ndarray]:
+        if planner == "rrtconnect":
+            return ompl_path(*args, **kwargs)
+        best = optimal_path(*args, **kwargs, improve_seconds=IMPROVE_FRACTION * args[3],
+                            piece=max_piece)
+        found.append(best)
+        return [np.array(p) for p in best.points]
+
     path_valid = checker.valid
     if world is not None and path_clearance > 0:
         path_valid = _roomy(checker, x0, xg, path_clearance, PATH_END_ZONE)
-    if _chord_valid(path_valid, x0, xg):
+    if planner == "rrtconnect" and _chord_valid(path_valid, x0, xg):
         path = [x0, xg]
     else:
         t_ompl = time.perf_counter()
@@ -543,13 +588,14 @@ def _plan_global(
             budget.check("looking for a path with OMPL")
             seconds = max(0.1, 0.25 * budget.seconds_left())
             try:
-                path = shape_held_path(checker, x0, xg, seconds, seed, path_valid, held)
+                path = shape_held_path(checker, x0, xg, seconds, seed, path_valid, held,
+                                       path_fn, chord=planner == "rrtconnect")
             except PlanningError:
                 path = None
         if path is None:
             budget.check("looking for a path with OMPL")
             seconds = max(0.1, 0.5 * budget.seconds_left())
-            path = ompl_path(checker, x0, xg, seconds, seed, valid=path_valid)
+            path = path_fn(checker, x0, xg, seconds, seed, valid=path_valid)
         planner_s = time.perf_counter() - t_ompl
     pieces_needed = sum(math.ceil(float(np.linalg.norm(b - a)) / max_piece)
                         for a, b in itertools.pairwise(path))

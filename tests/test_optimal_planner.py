@@ -1,0 +1,128 @@
+"""``--planner rrtstar``: OMPL RRT* under the ball–box cost, then our steering (issue 20).
+
+Every returned plan is replayed independently (tests/replay.py: scipy on lambdified fields)
+and checked against the limits and the goal at dense samples; the anytime cost never
+increases; the reported reversals equal the sign changes of the drive input read from the
+JSON segments by a formula of this file; the ball–box cost matches hand derivations.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
+from nilpotent.cli import app
+from nilpotent.errors import OptionError
+from nilpotent.models import get_model
+from nilpotent.planning.global_planner import plan_global
+from nilpotent.planning.optimal_planner import ball_box_metric, reversals
+from replay import resimulate
+
+LIMITS = {"theta": (-1.0, 1.0), "y": (-1.0, 1.0)}
+START, GOAL = (0.0, 0.0, 0.0), (3.0, 0.6, 0.0)
+
+
+@pytest.fixture(scope="module")
+def unicycle_plan():
+    """The unicycle between limits, far enough for the global route (seeded)."""
+    system = get_model("unicycle")
+    limits = system.limits.tightened(LIMITS)
+    result = plan_global(system, START, GOAL, 1e-6, limits=limits, time_limit=20.0,
+                         planner="rrtstar", objective="length", seed=3)
+    return system, result
+
+
+def drive_sign_changes(segments: list[dict], samples: int = 4001) -> int:
+    """Sign changes of input 1 evaluated from the JSON segment formula (zeros skipped)."""
+    values = []
+    for seg in segments:
+        t = np.linspace(0.0, seg["duration"], samples)
+        inp = seg["inputs"][0]
+        u = inp["constant"] + sum(a * np.cos((k + 1) * seg["omega"] * t)
+                                  for k, a in enumerate(inp["cos"]))
+        u = u + sum(b * np.sin((k + 1) * seg["omega"] * t) for k, b in enumerate(inp["sin"]))
+        values.append(np.atleast_1d(u))
+    u = np.concatenate(values)
+    signs = np.sign(u[np.abs(u) > 1e-9 * np.abs(u).max()])
+    return int(np.count_nonzero(np.diff(signs)))
+
+
+def test_rrtstar_plan_replays_within_limits_to_the_goal(unicycle_plan):
+    system, result = unicycle_plan
+    out = result.to_json()
+    assert out["planner"] == "rrtstar" and out["route"] == "global"
+    states = resimulate(system, START, out["segments"], samples=200)
+    assert np.all(np.abs(states[:, 1]) <= 1.0 + 1e-9)   # y limit
+    assert np.all(np.abs(states[:, 2]) <= 1.0 + 1e-9)   # theta limit
+    assert np.linalg.norm(states[-1] - np.array(GOAL)) <= 1e-5
+
+
+def test_rrtstar_cost_is_non_increasing(unicycle_plan):
+    _, result = unicycle_plan
+    history = [c for _, c in result.cost_history]
+    assert history, "RRT* recorded no cost"
+    assert all(b <= a for a, b in itertools.pairwise(history))
+    assert result.path_cost == pytest.approx(history[-1])
+    assert all(b >= a for (a, _), (b, _) in itertools.pairwise(result.cost_history))
+
+
+def test_reported_reversals_are_the_drive_sign_changes(unicycle_plan):
+    _, result = unicycle_plan
+    out = json.loads(json.dumps(result.to_json()))
+    assert out["reversals"] == drive_sign_changes(out["segments"])
+
+
+def test_reversals_of_hand_made_controls():
+    from nilpotent.planning.controls import constant_segment
+
+    fwd, back = constant_segment((1.0, 0.0)), constant_segment((-2.0, 0.5))
+    assert reversals([fwd, back, fwd]) == 2
+    assert reversals([fwd, constant_segment((0.0, 1.0)), fwd]) == 0  # a stop is no reversal
+    assert reversals([]) == 0
+
+
+def test_ball_box_cost_by_hand():
+    """Unicycle frame (X1, X2, [X1, X2]) = ((cos θ, sin θ, 0), (0, 0, 1), (sin θ, −cos θ, 0)):
+    a step along the heading costs its length, a sideways step ``d`` costs ``2√(π|d|)``
+    (weight 2), a turn on the spot ``|Δθ|``."""
+    metric = ball_box_metric(get_model("unicycle"), (0.0, 0.0, 0.0))
+    p = np.zeros((1, 3))
+    assert metric.cost(p, np.array([[0.3, 0.0, 0.0]]))[0] == pytest.approx(0.3)
+    assert metric.cost(p, np.array([[0.0, 0.0, -0.2]]))[0] == pytest.approx(0.2)
+    assert metric.cost(p, np.array([[0.0, 0.01, 0.0]]))[0] == pytest.approx(
+        2 * math.sqrt(math.pi * 0.01))
+    # heading π/2: the step along x is now sideways
+    q = np.array([[0.0, 0.0, math.pi / 2]])
+    assert metric.cost(q, q + np.array([0.01, 0.0, 0.0]))[0] == pytest.approx(
+        2 * math.sqrt(math.pi * 0.01))
+    # the edge cost of a long chord sums its pieces: 4 pieces of length ≤ 1 for 3.5 ahead
+    assert metric.edge_cost(p[0], np.array([3.5, 0.0, 0.0]), 1.0) == pytest.approx(3.5)
+    side = metric.edge_cost(p[0], np.array([0.0, 2.0, 0.0]), 1.0)
+    assert side == pytest.approx(2 * 2 * math.sqrt(math.pi * 1.0))
+
+
+def test_unknown_planner_refused():
+    with pytest.raises(OptionError, match="planner"):
+        plan_global(get_model("unicycle"), START, GOAL, planner="prm")
+    result = CliRunner().invoke(app, ["plan", "unicycle", "--to", "x=1", "--planner", "prm"])
+    assert result.exit_code == 2
+    assert "--planner" in result.output and "Traceback" not in result.output
+
+
+@pytest.mark.slow
+def test_cli_rrtstar_json_fields():
+    result = CliRunner().invoke(app, [
+        "plan", "unicycle", "--to", "x=3,y=0.6", "--limit", "theta=-1:1", "--limit", "y=-1:1",
+        "--planner", "rrtstar", "--objective", "length", "--tol", "1e-6", "--time-limit", "20",
+        "--seed", "3", "--json"])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    assert out["planner"] == "rrtstar"
+    assert out["reversals"] == drive_sign_changes(out["segments"])
+    assert isinstance(out["path_cost"], float) and out["cost_history"]
