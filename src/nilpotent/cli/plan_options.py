@@ -32,7 +32,7 @@ WorldOpt = Annotated[
     Path | None,
     typer.Option("--world", metavar="W",
                  help="World file (workspace bounds and obstacles), or a built-in world's "
-                      "name: room, parking."),
+                      "name: room, parking, corner."),
 ]
 
 LimitOpt = Annotated[

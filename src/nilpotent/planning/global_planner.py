@@ -524,6 +524,8 @@ def _plan_global(
             "raise --max-piece or plan to a nearer goal"
         )
 
+    found: list[Any] = []  # rrtstar: its OptimalPath
+
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
         v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
@@ -564,7 +566,6 @@ def _plan_global(
                 pass
     # 2. a path in configuration space, with room around it where possible
     planner_s = 0.0
-    found: list[Any] = []  # rrtstar: its OptimalPath
 
     def path_fn(*args: Any, **kwargs: Any) -> list[np.ndarray]:
         if planner == "rrtconnect":
