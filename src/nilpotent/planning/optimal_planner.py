@@ -42,6 +42,7 @@ plan (``car``, ``unicycle``, ``car-trailers:K``: input 1 is the rear speed).
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 import time
@@ -96,33 +97,45 @@ class BallBoxMetric:
     weights: tuple[int, ...]
     frame: Callable[[np.ndarray], np.ndarray]
 
+    def __post_init__(self) -> None:
+        w = np.asarray(self.weights)
+        object.__setattr__(self, "_horizontal", w == 1)
+        object.__setattr__(self, "_higher", w > 1)
+        object.__setattr__(self, "_powers", 1.0 / w[w > 1])
+
     def coordinates(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
         """``z (N, n)`` with ``q − p = Σ_j z_j Y_j((p+q)/2)``; rows ``NaN`` where the frame is
         singular."""
-        p, q = np.atleast_2d(p), np.atleast_2d(q)
-        n = p.shape[1]
+        n = len(self.weights)
+        p = np.asarray(p, dtype=float).reshape(-1, n)
+        q = np.asarray(q, dtype=float).reshape(-1, n)
         f = self.frame(0.5 * (p + q)).reshape(-1, n, n).transpose(0, 2, 1)
-        z = np.full(p.shape, np.nan)
-        ok = np.asarray(np.isfinite(f).all(axis=(1, 2)))
-        ok[ok] = np.abs(np.linalg.det(f[ok])) > 1e-12  # pyright: ignore[reportIndexIssue]
-        if ok.any():
-            z[ok] = np.linalg.solve(f[ok], (q - p)[ok][..., None])[..., 0]
+        d = (q - p)[..., None]
+        with np.errstate(all="ignore"):
+            try:
+                z = np.linalg.solve(f, d)[..., 0]
+            except np.linalg.LinAlgError:  # an exactly singular frame: row by row
+                z = np.full(p.shape, np.nan)
+                for i in range(len(p)):
+                    with contextlib.suppress(np.linalg.LinAlgError):
+                        z[i] = np.linalg.solve(f[i], d[i])[:, 0]
+        z[~np.isfinite(z).all(axis=1)] = np.nan
         return z
 
     def cost(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
         """``d̂(p, q)`` for rows of ``p``, ``q`` ``(N, n)`` (:data:`SINGULAR_COST` where the
         frame is singular)."""
         z = self.coordinates(p, q)
-        w = np.asarray(self.weights)
-        horizontal = np.sqrt(np.sum(z[:, w == 1] ** 2, axis=1))
-        higher = np.sum(BOX_CONSTANT * np.abs(z[:, w > 1]) ** (1.0 / w[w > 1]), axis=1)
+        horizontal = np.sqrt((z[:, self._horizontal] ** 2).sum(axis=1))  # type: ignore[attr-defined]
+        higher = (BOX_CONSTANT * np.abs(z[:, self._higher])  # type: ignore[attr-defined]
+                  ** self._powers).sum(axis=1)  # type: ignore[attr-defined]
         out = horizontal + higher
         return np.where(np.isfinite(out), out, SINGULAR_COST)
 
     def edge_cost(self, p: np.ndarray, q: np.ndarray, piece: float) -> float:
         """The cost of the chord ``p → q`` cut into ``k = ⌈‖q − p‖ / piece⌉`` equal pieces
         (as the global planner steers it): the sum of their :meth:`cost`."""
-        k = max(1, math.ceil(float(np.linalg.norm(q - p)) / piece))
+        k = max(1, math.ceil(math.dist(p, q) / piece))
         t = np.arange(k + 1, dtype=float)[:, None] / k
         pts = p + t * (q - p)
         return float(np.sum(self.cost(pts[:-1], pts[1:])))
@@ -298,25 +311,27 @@ def shortcut(
     points: Sequence[np.ndarray], metric: BallBoxMetric, piece: float,
     valid: Callable[[np.ndarray], np.ndarray], resolution: float,
 ) -> list[np.ndarray]:
-    """Replace sub-paths ``i..j`` by their chord where it is valid and cheaper (ball–box cost
-    of :meth:`BallBoxMetric.edge_cost`), longest first, until no replacement helps."""
+    """The cheapest path through a subsequence of ``points`` whose chords are valid (ball–box
+    cost of :meth:`BallBoxMetric.edge_cost`): dynamic programming over the ``O(n²)`` chords,
+    a chord checked only when it would improve the best cost to its end; the path's own
+    edges are kept as they are (valid already)."""
     pts = [np.asarray(p, dtype=float) for p in points]
-    edge = [metric.edge_cost(a, b, piece) for a, b in itertools.pairwise(pts)]
-    changed = True
-    while changed and len(pts) > 2:
-        changed = False
-        for span in range(len(pts) - 1, 1, -1):
-            for i in range(len(pts) - span):
-                j = i + span
-                c = metric.edge_cost(pts[i], pts[j], piece)
-                if c < sum(edge[i:j]) and _chord(valid, pts[i], pts[j], resolution):
-                    pts = pts[: i + 1] + pts[j:]
-                    edge = [*edge[:i], c, *edge[j:]]
-                    changed = True
-                    break
-            if changed:
-                break
-    return pts
+    n = len(pts)
+    best = [0.0] + [math.inf] * (n - 1)
+    back = [0] * n
+    for j in range(1, n):
+        budget.check("shortcutting the path of OMPL RRT*")
+        best[j] = best[j - 1] + metric.edge_cost(pts[j - 1], pts[j], piece)
+        back[j] = j - 1
+        for i in range(j - 1):
+            c = best[i] + metric.edge_cost(pts[i], pts[j], piece)
+            if c < best[j] and _chord(valid, pts[i], pts[j], resolution):
+                best[j], back[j] = c, i
+    out, j = [pts[-1]], n - 1
+    while j > 0:
+        j = back[j]
+        out.append(pts[j])
+    return out[::-1]
 
 
 def _chord(valid: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray,
