@@ -126,3 +126,41 @@ def test_cli_rrtstar_json_fields():
     assert out["planner"] == "rrtstar"
     assert out["reversals"] == drive_sign_changes(out["segments"])
     assert isinstance(out["path_cost"], float) and out["cost_history"]
+
+
+def car_body_points(q: np.ndarray, wheelbase: float = 0.6, per_edge: int = 20) -> np.ndarray:
+    """Points on the edges of the car's body rectangle, from ``L/4`` behind the rear axle to
+    ``L/4`` ahead of the front one, ``3L/4`` wide (docstring of ``car_outline``), ``(N, P, 2)``."""
+    h = 3 * wheelbase / 8
+    corners = np.array([(-wheelbase / 4, -h), (5 * wheelbase / 4, -h),
+                        (5 * wheelbase / 4, h), (-wheelbase / 4, h)])
+    s = np.linspace(0.0, 1.0, per_edge)[:, None]
+    local = np.vstack([a + s * (b - a) for a, b in zip(corners, np.roll(corners, -1, axis=0),
+                                                          strict=True)])
+    c, sn = np.cos(q[:, 2])[:, None], np.sin(q[:, 2])[:, None]
+    x = q[:, :1] + c * local[None, :, 0] - sn * local[None, :, 1]
+    y = q[:, 1:2] + sn * local[None, :, 0] + c * local[None, :, 1]
+    return np.stack([x, y], axis=-1)
+
+
+@pytest.mark.slow
+def test_car_rrtstar_plan_in_a_world_replays_collision_free():
+    """The ``car`` around a block (rrtstar): the independently re-simulated body stays
+    outside the block and inside the bounds, |φ| within its limit, and reaches the goal."""
+    from nilpotent.planning.world import world_from_dict
+
+    block = [[1.5, 0.8], [2.5, 0.8], [2.5, 2.5], [1.5, 2.5]]
+    world = world_from_dict({"name": "block", "bounds": {"x": [-2, 7], "y": [-2.5, 2.5]},
+                             "obstacles": [{"polygon": block}]})
+    system = get_model("car")
+    start, goal = (0.0, 0.0, 0.0, 0.0), (4.0, 0.0, 0.0, 0.0)
+    out = plan_global(system, start, goal, 1e-6, world=world, time_limit=60.0,
+                      planner="rrtstar", seed=1).to_json()
+    q = resimulate(system, start, out["segments"], samples=200)
+    assert np.linalg.norm(q[-1] - np.array(goal)) <= 1e-5
+    assert np.all(np.abs(q[:, 3]) <= math.atan(0.6) + 1e-9)
+    pts = car_body_points(q).reshape(-1, 2)
+    inside = ((pts[:, 0] > 1.5) & (pts[:, 0] < 2.5) & (pts[:, 1] > 0.8) & (pts[:, 1] < 2.5))
+    assert not inside.any()
+    assert np.all((pts[:, 0] > -2) & (pts[:, 0] < 7) & (pts[:, 1] > -2.5) & (pts[:, 1] < 2.5))
+    assert out["reversals"] == drive_sign_changes(out["segments"])
