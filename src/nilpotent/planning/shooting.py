@@ -585,7 +585,9 @@ def shortest_normal_geodesic(
     cont = _continuation(flow, us, ug, lifted) if lifted is not None else None
     if cont is not None:
         rows, errs = np.vstack([rows, cont[0]]), np.append(errs, cont[1])
-    if not np.any(errs <= SEARCH_TOL):  # the least-energy start, and longer searches
+    if cont is None or not np.any(errs <= SEARCH_TOL):
+        # the lift's branch was lost, or nothing converged: the least-energy start, and
+        # longer searches
         energy = _energy_start(system, us, ug, flow, seed)
         more = [rows[np.isfinite(errs)], _starts(system, us, ug, seed + 1)[1:]]
         rows, errs = _lm(flow, us, ug, np.vstack(more if energy is None else [energy, *more]), 40)
