@@ -20,38 +20,46 @@ the *exact* Jacobian ``∂y(1)/∂p(0)``: the variational equations
 ``Ψ̇ = A(y, p) Ψ`` (``A`` the Jacobian of the Hamiltonian field, polynomial,
 differentiated exactly by sympy and compiled by
 :func:`nilpotent.numeric.compile.compile_map`) are integrated alongside the
-flow by a fixed-step Dormand–Prince 8 scheme (:data:`STEPS` steps: the
-fields are polynomial and the unit-size flow is smooth, so the endpoint and
-its Jacobian are accurate to about ``1e-12``; checked at twice the steps).
+flow by a fixed-step Dormand–Prince 8 scheme (:data:`SEARCH_STEPS` steps for the
+search, :data:`STEPS` — or twice that — for the final solve, to ``1e-11``).
 
 **Starts.**  The problem is dilated to unit homogeneous size (``δ_λ`` maps
 geodesics to geodesics, lengths times ``λ``, covectors ``p_j`` times
-``λ^{2−w_j}``); then LM runs from the straight line (``p`` zero in weights
-≥ 2, which keeps the controls constant: exact when the goal is on the line)
-and from seeded random covectors of every weight, all in one batch.  If none
-converges, **continuation** in the goal: from the end of the straight line to
-the goal in steps, each solved from the previous covector (halving a step that
-fails).  The shortest converged extremal is kept.
+``λ^{2−w_j}``); then, in one batch, LM runs from the straight line (``p`` zero
+in weights ≥ 2, which keeps the controls constant: exact when the goal is on
+the line) and from :data:`RANDOM_STARTS` seeded random covectors of every
+weight.  **Continuation in the goal** from the *lift* of the quotient's
+shortest geodesic: the coordinates of weight ``< step`` form a nilpotent
+system of their own (triangular), solved in closed form for step 2
+(:func:`~nilpotent.planning.geodesic.shortest_geodesic`) or by this shooting;
+with the top-weight covector zero its extremal is one of the whole system,
+reaching the goal except in the top weight, and the goal is then followed
+from there in steps (halved on failure).  If that branch is lost or nothing
+converged, a **least-energy start** (SLSQP on Fourier controls under the
+exact endpoint constraint; its multiplier is the final covector, flowed back
+to ``p(0)``) and longer searches.  The shortest extremal found is kept (a
+search error up to :data:`ACCEPT_TOL` is accepted where the final solve stalls,
+as at conjugate points: the polish below reaches the goal).
 
 **Controls.**  ``u(t)`` is not a trigonometric polynomial in general (elliptic
-functions for the Engel group); it is written as one segment of ``duration``
-1 and ``omega = π`` (a Fourier extension: ``cos``/``sin`` of ``kπt``,
-``k ≤`` :data:`HARMONICS`), fitted by least squares, then polished by LM on the
-exact closed-form flow (:mod:`nilpotent.planning.exact_flow`) until the goal
-is reached to rounding.  The polish moves the control by the fit error only
-(``~1e-7`` relative), so its length is the geodesic's to that order.
+functions for the Engel group); it is written as :data:`PIECES` segments, each
+a Fourier extension (``omega = π/duration``, ``cos``/``sin`` up to
+:data:`HARMONICS`) fitted by least squares to the samples of the flow, then
+polished by LM on the exact closed-form flow (:mod:`nilpotent.planning.exact_flow`)
+until the goal is reached to rounding.  The polish moves the control by the fit
+error only, so its length (``control_length``) is the geodesic's to about
+``1e-9`` relative.
 
 **Abnormal curves.**  The endpoint map's differential along the returned
-control (its Jacobian in the segment's ``2·(2K+1)·m`` coefficients, a basis
-rich enough to span the image of the differential) is computed; if its rank
-is below ``n`` (relative singular value ``≤`` :data:`ABNORMAL_RANK_TOL`) the
-curve is singular (**abnormal**) and is reported so
-(:attr:`ShootingGeodesic.abnormal`).  On the Martinet system
-``X̂₁ = ∂x + y²/2 ∂z, X̂₂ = ∂y`` the line to ``(a, 0, 0)`` is abnormal (and,
-in this flat case, also normal): the straight-line start finds it with length
-``a`` and it is reported abnormal.  Strictly abnormal minimisers (not normal,
-e.g. Liu–Sussmann's) are not found by normal shooting; the straight line is the
-one abnormal candidate tried.
+control (its Jacobian in the segments' coefficients, a basis rich enough to
+span the image of the differential) is computed; if its rank is below ``n``
+(relative singular value ``≤`` :data:`ABNORMAL_RANK_TOL`) the curve is
+singular (**abnormal**) and is reported so (:attr:`ShootingGeodesic.abnormal`).
+On the Martinet system ``X̂₁ = ∂x + y²/2 ∂z, X̂₂ = ∂y`` the line to
+``(a, 0, 0)`` is abnormal (and, in this flat case, also normal): the
+straight-line start finds it with length ``|a|`` and it is reported abnormal.
+Strictly abnormal minimisers (not normal, e.g. Liu–Sussmann's) are not found
+by normal shooting; the straight line is the one abnormal candidate tried.
 
 What is *not* claimed: that the shortest normal geodesic found is the global
 minimiser (the multi-start may miss the shortest branch; minimisers may be
@@ -75,7 +83,8 @@ from nilpotent.numeric.signals import InputSignal, Segment
 from nilpotent.numeric.tableaux import DOP853
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
-from nilpotent.planning.exact_flow import endpoint_and_jacobian
+from nilpotent.planning.exact_flow import endpoint, endpoint_and_jacobian
+from nilpotent.planning.geodesic import control_length, shortest_geodesic
 from nilpotent.planning.triangular import TriangularSystem
 
 __all__ = [
@@ -427,8 +436,6 @@ def _lifted_covector(
     form (:func:`~nilpotent.planning.geodesic.shortest_geodesic`), higher ones
     by this shooting.
     """
-    from nilpotent.planning.geodesic import shortest_geodesic
-
     top = system.step - 1
     if top < 1:
         return None
@@ -609,15 +616,11 @@ def shortest_normal_geodesic(
             p_unit, final_err = fine[0], float(fine_err[0])
             break
     length = float(np.linalg.norm(flow.controls(np.hstack([us, p_unit])[None, :])[0]))
-    segs, val, jac = _fit_and_polish(flow, us, ug, p_unit)
+    segs, _, jac = _fit_and_polish(flow, us, ug, p_unit)
     rank = _rank(jac)
     segments = [seg.scaled(scale) for seg in segs]
-    from nilpotent.planning.exact_flow import endpoint
-    from nilpotent.planning.geodesic import control_length
-
     reached = endpoint(system, ys, segments)
     covector = p_unit * scale ** (2.0 - w)
-    del val
     return ShootingGeodesic(
         tuple(float(v) for v in covector),
         length * scale,
