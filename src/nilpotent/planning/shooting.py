@@ -576,11 +576,21 @@ def shortest_normal_geodesic(
     n = system.n
     if ys.shape != (n,) or yg.shape != (n,):
         raise PlanningError(f"start and goal need {n} privileged coordinates")
-    w = np.asarray(system.weights, dtype=float)
     scale = max(system.quasi_norm(yg - ys), system.quasi_norm(ys))
     if scale == 0.0 or np.array_equal(ys, yg):
         zero = (0.0,) * n
         return ShootingGeodesic(zero, 0.0, (), 0.0, tuple(ys), 0.0, 0.0, 1, False, 0)
+    try:
+        return _shortest(system, ys, yg, scale, seed)
+    except (np.linalg.LinAlgError, ValueError) as exc:  # a degenerate linear algebra step
+        raise PlanningError(f"normal-geodesic shooting failed: {exc}") from None
+
+
+def _shortest(
+    system: TriangularSystem, ys: np.ndarray, yg: np.ndarray, scale: float, seed: int
+) -> ShootingGeodesic:
+    n = system.n
+    w = np.asarray(system.weights, dtype=float)
     flow = hamiltonian_flow(system)
     # δ_{1/scale}: unit-size problem (divide once per unit of weight against underflow)
     us, ug = ys.copy(), yg.copy()
