@@ -33,6 +33,7 @@ Every returned plan is re-simulated as a whole (:func:`~nilpotent.planning.verif
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import time
@@ -59,6 +60,13 @@ from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
 from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.timing import (
+    TimedTrajectory,
+    drive_reversals,
+    input_bounds,
+    input_reversals,
+    retime,
+)
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
 from nilpotent.progress import report as report_progress
@@ -139,6 +147,9 @@ class GlobalPlan(PlanFigure):
     clearance_required:
         The distance robot–obstacles the motion had to exceed (``clearance`` of
         :func:`plan_global`; model length units).
+    timed:
+        The plan re-timed under the input bounds of :func:`plan_global`
+        (:func:`~nilpotent.planning.timing.retime`), or ``None`` when none were given.
     """
 
     plan: Plan
@@ -153,6 +164,7 @@ class GlobalPlan(PlanFigure):
     time_limit: float = math.inf
     seconds: float = field(default=0.0)
     clearance_required: float = 0.0
+    timed: TimedTrajectory | None = None
 
     @property
     def error(self) -> float:
@@ -207,6 +219,13 @@ class GlobalPlan(PlanFigure):
         })
         if self.world is not None:
             out["world_definition"] = self.world.to_json()
+        out["input_reversals"] = list(input_reversals(self.plan.segments))
+        out["reversals"] = drive_reversals(self.plan.system, self.plan.segments)
+        if out["reversals"] is None:
+            reasons["reversals"] = f"model {self.plan.system.name} has no drive input " \
+                "(vehicle models: car, unicycle, car-trailers)"
+        if self.timed is not None:
+            out["trajectory"] = self.timed.to_json()
         return plan_json(out, reasons)
 
 
@@ -374,6 +393,9 @@ def plan_global(
     path_clearance: float = PATH_CLEARANCE,
     hold_shape: bool = True,
     objective: str = "reach",
+    max_speed: float | Sequence[float] | dict[str, float] | None = None,
+    max_accel: float | Sequence[float] | dict[str, float] | None = None,
+    trajectory_step: float | None = None,
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -423,6 +445,16 @@ def plan_global(
         The local steering's objective, ``"reach"`` or ``"length"``
         (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
         :func:`~nilpotent.planning.iterative.plan`).
+    max_speed, max_accel:
+        Bounds on the inputs of the re-timed motion, ``|ũ_i| ≤ V_i`` and
+        ``|dũ_i/dt| ≤ A_i``: a number (every input), ``m`` numbers, or
+        ``{"u1": V, ...}`` (a speed bound may leave inputs out: unbounded; an
+        acceleration bound must name them all).  Given, the verified plan is
+        re-timed by TOPP-RA (:func:`~nilpotent.planning.timing.retime`) into
+        :attr:`GlobalPlan.timed`; ``max_speed`` needs ``max_accel``.
+    trajectory_step:
+        Largest time between the samples of the re-timed motion (default: its
+        duration / 500).
 
     Raises
     ------
@@ -437,13 +469,25 @@ def plan_global(
     """
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
+    bounds = input_bounds(sys.m, max_speed, max_accel)
+    if trajectory_step is not None and bounds is None:
+        raise OptionError("trajectory_step needs max_accel (the re-timing's bounds)")
+    if trajectory_step is not None and not (math.isfinite(trajectory_step)
+                                            and trajectory_step > 0):
+        raise OptionError(f"trajectory_step must be a positive number, got {trajectory_step}")
     with budget.time_budget(time_limit):
-        return _plan_global(
+        result = _plan_global(
             sys, start, goal, tol, world=world, limits=limits,
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
             max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
             path_clearance=path_clearance, hold_shape=hold_shape, objective=objective)
+        if bounds is None:
+            return result
+        p = result.plan
+        timed = retime(sys, p.start, p.segments, bounds, step=trajectory_step,
+                       reached=p.reached, engine=engine)
+        return dataclasses.replace(result, timed=timed)
 
 
 def _plan_global(
