@@ -60,13 +60,7 @@ from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
 from nilpotent.planning.simulation import simulate_path
-from nilpotent.planning.timing import (
-    TimedTrajectory,
-    drive_reversals,
-    input_bounds,
-    input_reversals,
-    retime,
-)
+from nilpotent.planning.timing import TimedTrajectory, input_bounds, motion_fields, retime
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
 from nilpotent.progress import report as report_progress
@@ -219,13 +213,7 @@ class GlobalPlan(PlanFigure):
         })
         if self.world is not None:
             out["world_definition"] = self.world.to_json()
-        out["input_reversals"] = list(input_reversals(self.plan.segments))
-        out["reversals"] = drive_reversals(self.plan.system, self.plan.segments)
-        if out["reversals"] is None:
-            reasons["reversals"] = f"model {self.plan.system.name} has no drive input " \
-                "(vehicle models: car, unicycle, car-trailers)"
-        if self.timed is not None:
-            out["trajectory"] = self.timed.to_json()
+        out.update(motion_fields(self.plan.system, self.plan.segments, self.timed, reasons))
         return plan_json(out, reasons)
 
 
@@ -469,12 +457,7 @@ def plan_global(
     """
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
-    bounds = input_bounds(sys.m, max_speed, max_accel)
-    if trajectory_step is not None and bounds is None:
-        raise OptionError("trajectory_step needs max_accel (the re-timing's bounds)")
-    if trajectory_step is not None and not (math.isfinite(trajectory_step)
-                                            and trajectory_step > 0):
-        raise OptionError(f"trajectory_step must be a positive number, got {trajectory_step}")
+    bounds = input_bounds(sys.m, max_speed, max_accel, step=trajectory_step)
     with budget.time_budget(time_limit):
         result = _plan_global(
             sys, start, goal, tol, world=world, limits=limits,

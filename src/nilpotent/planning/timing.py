@@ -55,7 +55,7 @@ from nilpotent.planning import budget
 
 __all__ = [
     "DRIVE_INPUTS", "InputBounds", "TimedTrajectory", "bound_values", "drive_reversals",
-    "input_bounds", "input_names", "input_reversals", "retime",
+    "input_bounds", "input_names", "input_reversals", "motion_fields", "retime",
 ]
 
 #: Vehicle models and their drive input (0-based): the forward speed, whose sign
@@ -154,18 +154,25 @@ class InputBounds:
 def input_bounds(
     m: int, max_speed: float | Sequence[float] | Mapping[str, float] | None,
     max_accel: float | Sequence[float] | Mapping[str, float] | None,
-    speed_option: str = "max_speed", accel_option: str = "max_accel",
+    speed_option: str = "max_speed", accel_option: str = "max_accel", *,
+    step: float | None = None,
 ) -> InputBounds | None:
     """The bounds of :func:`retime` from the user's values (:func:`bound_values`), or
-    ``None`` when neither is given.
+    ``None`` when neither is given; ``step`` (the samples' spacing, ``None``: the
+    default) is checked with them.
 
     Raises
     ------
     OptionError
-        A bad bound (:func:`bound_values`), or a speed bound without an acceleration
-        bound (the re-timed inputs would jump at rest points).
+        A bad bound (:func:`bound_values`), a speed bound without an acceleration
+        bound (the re-timed inputs would jump at rest points), a step that is not a
+        positive number or is given without bounds.
     """
+    if step is not None and not (math.isfinite(step) and step > 0):
+        raise OptionError(f"the trajectory step must be a positive number, got {step}")
     if max_speed is None and max_accel is None:
+        if step is not None:
+            raise OptionError(f"a trajectory step needs {accel_option} (the re-timing's bounds)")
         return None
     if max_accel is None:
         raise OptionError(
@@ -514,7 +521,6 @@ def retime(
     s_all = np.clip(np.concatenate(plan_times), 0.0, starts[-1])
     s_all[0], s_all[-1] = 0.0, starts[-1]
     u_all = np.vstack(inputs)
-    u_all[0] = u_all[-1] = 0.0
     states = _states_at(system, start, segs, s_all, engine)
     if reached is not None:
         want = np.asarray(reached, dtype=float)
@@ -586,3 +592,17 @@ def drive_reversals(system: ControlSystem, segments: Sequence[Segment]) -> int |
     if index is None or index >= system.m:
         return None
     return input_reversals(segments)[index] if segments else 0
+
+
+def motion_fields(system: ControlSystem, segments: Sequence[Segment],
+                  timed: TimedTrajectory | None, reasons: dict[str, str]) -> dict[str, Any]:
+    """The plan JSON's ``input_reversals``, ``reversals`` and (when re-timed)
+    ``trajectory``; the reason of a ``null`` ``reversals`` is added to ``reasons``."""
+    out: dict[str, Any] = {"input_reversals": list(input_reversals(segments)),
+                           "reversals": drive_reversals(system, segments)}
+    if out["reversals"] is None:
+        reasons["reversals"] = (f"model {system.name} has no drive input (vehicle models: "
+                                "car, unicycle, car-trailers)")
+    if timed is not None:
+        out["trajectory"] = timed.to_json()
+    return out
