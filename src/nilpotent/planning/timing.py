@@ -52,6 +52,7 @@ from nilpotent.errors import ComputationLimitError, IntegrationError, OptionErro
 from nilpotent.numeric.signals import InputSignal, Segment, Signal
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
+from nilpotent.strict_json import json_object
 
 __all__ = [
     "DRIVE_INPUTS", "InputBounds", "TimedTrajectory", "bound_values", "drive_reversals",
@@ -147,8 +148,8 @@ class InputBounds:
 
     def to_json(self) -> dict[str, Any]:
         """``{"max_speed": [...], "max_accel": [...]}`` (``null``: no bound)."""
-        return {"max_speed": [v if math.isfinite(v) else None for v in self.speed],
-                "max_accel": list(self.accel)}
+        return json_object({"max_speed": [v if math.isfinite(v) else None for v in self.speed],
+                            "max_accel": list(self.accel)})
 
 
 def input_bounds(
@@ -409,11 +410,11 @@ class TimedTrajectory:
     def to_json(self) -> dict[str, Any]:
         """``{"t": [...], "x": [[...]], "u": [[...]]}`` (one row per sample) with
         ``duration``, ``plan_time`` (``s(t)``), ``stops``, ``max_speed``, ``max_accel``."""
-        return {
+        return json_object({
             "t": self.times.tolist(), "x": self.states.tolist(), "u": self.inputs.tolist(),
             "plan_time": self.plan_times.tolist(), "duration": self.duration,
             "stops": list(self.stops), **self.bounds.to_json(),
-        }
+        })
 
     def to_csv(self) -> str:
         """The samples as CSV: header ``t,<coordinates>,u1..um``, one row per sample
