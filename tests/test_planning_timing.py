@@ -150,13 +150,16 @@ def test_constant_inputs_give_the_closed_form_time_optimal_profile():
     rest-to-rest motion accelerates, cruises, brakes, in L/V + V/A (trapezoid profile)."""
     system = nil.get_model("unicycle")
     segments = (Segment(1.0, 1.0, (InputSignal(1.0), InputSignal(0.0))),
-                Segment(2.0, 1.0, (InputSignal(0.0), InputSignal(0.5))))
+                Segment(2.0, 1.0, (InputSignal(0.0), InputSignal(0.5))),
+                Segment(1.0, 1.0, (InputSignal(0.0), InputSignal(1e-8))))
     bounds = InputBounds((0.5, 0.25), (1.0, 1.0))
     timed = retime(system, [0, 0, 0], segments, bounds)
-    want = (1.0 / 0.5 + 0.5 / 1.0) + (1.0 / 0.25 + 0.25 / 1.0)
+    # the last piece, L = 1e-8 < V²/A, never cruises: 2√(L/A) (a triangle)
+    want = (1.0 / 0.5 + 0.5 / 1.0) + (1.0 / 0.25 + 0.25 / 1.0) + 2 * math.sqrt(1e-8)
     assert timed.duration == pytest.approx(want, rel=1e-3)
-    assert len(timed.stops) == 3 and timed.stops[1] == pytest.approx(2.5, rel=1e-3)
-    assert np.allclose(timed.states[-1], [1.0, 0.0, 1.0], atol=1e-12)
+    assert len(timed.stops) == 4 and timed.stops[1] == pytest.approx(2.5, rel=1e-3)
+    assert timed.stops[3] - timed.stops[2] == pytest.approx(2e-4, rel=1e-3)
+    assert np.allclose(timed.states[-1], [1.0, 0.0, 1.0 + 1e-8], atol=1e-12)
     check_bounds(timed, bounds.speed, bounds.accel)
 
 

@@ -39,6 +39,7 @@ drive input of the vehicle models (:data:`DRIVE_INPUTS`).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from collections.abc import Mapping, Sequence
@@ -70,6 +71,9 @@ REVERSAL_SAMPLES = 64
 #: A segment boundary is a jump when the inputs on its two sides differ by more than
 #: this fraction of the largest input (or absolutely, for inputs below 1).
 JUMP_FRACTION = 1e-9
+#: A piece whose inputs stay below this fraction of the plan's largest input does not
+#: move (it is left out of the re-timed motion: plan time passes at a stop).
+REST_FRACTION = 1e-12
 #: TOPP-RA grid points per segment of the plan and per harmonic (at least one harmonic).
 GRID_PER_SEGMENT = 100
 #: Points per grid cell where the bounds are checked after TOPP-RA (module doc).
@@ -217,10 +221,13 @@ def _toppra() -> Any:
     return toppra
 
 
-def _input_path(segments: Sequence[Segment], starts: np.ndarray) -> Any:
-    """``w`` on ``[starts[0], starts[-1]]`` as a toppra geometric path (``w(starts[0]) = 0``;
-    right-continuous at the segment boundaries inside)."""
+def _input_path(segments: Sequence[Segment], starts: np.ndarray, scale: float) -> Any:
+    """``W = w / D`` as a toppra geometric path of ``σ = (s − s₀)/d`` on ``[0, 1]``
+    (``d``, the piece's plan duration; ``D = scale``, the size of its input
+    displacement; ``w = 0`` at the start; right-continuous at the segment boundaries
+    inside): ``dW/dσ = u d/D``, ``d²W/dσ² = u' d²/D`` (module doc of :func:`_profile`)."""
     toppra = _toppra()
+    lo, span = float(starts[0]), float(starts[-1] - starts[0])
 
     class InputPath(toppra.interpolator.AbstractGeometricPath):
         def __init__(self) -> None:
@@ -243,11 +250,11 @@ def _input_path(segments: Sequence[Segment], starts: np.ndarray) -> Any:
 
         @property
         def path_interval(self) -> np.ndarray:
-            return np.array([self.starts[0], self.starts[-1]])
+            return np.array([0.0, 1.0])
 
         def __call__(self, path_positions: Any, order: int = 0) -> np.ndarray:
             scalar = np.ndim(path_positions) == 0
-            s = np.atleast_1d(np.asarray(path_positions, dtype=float))
+            s = lo + span * np.atleast_1d(np.asarray(path_positions, dtype=float))
             idx = np.clip(np.searchsorted(self.starts, s, side="right") - 1, 0,
                           len(self.segments) - 1)
             out = np.empty((s.size, self.dof))
@@ -256,11 +263,11 @@ def _input_path(segments: Sequence[Segment], starts: np.ndarray) -> Any:
                 tau = s[sel] - self.starts[k]
                 if order == 0:
                     vals = (self.primitives[k].values(tau).T + self.offsets[k]
-                            + tau[:, None] * self.linear[k][None, :])
+                            + tau[:, None] * self.linear[k][None, :]) / scale
                 elif order == 1:
-                    vals = self.segments[k].values(tau).T
+                    vals = self.segments[k].values(tau).T * (span / scale)
                 elif order == 2:
-                    vals = self.derivatives[k].values(tau).T
+                    vals = self.derivatives[k].values(tau).T * (span**2 / scale)
                 else:
                     raise ValueError(f"order {order} is not supported")
                 out[sel] = vals
@@ -269,9 +276,9 @@ def _input_path(segments: Sequence[Segment], starts: np.ndarray) -> Any:
     return InputPath()
 
 
-def _clock(lo: float, hi: float) -> Any:
-    """The path ``s ↦ s`` on ``[lo, hi]``: re-timed by toppra's parametrizer it gives
-    ``s(t)``, ``ṡ(t)``, ``s̈(t)``."""
+def _clock(lo: float, span: float) -> Any:
+    """The path ``σ ↦ s = lo + span·σ`` on ``[0, 1]``: re-timed by toppra's parametrizer
+    it gives the plan time ``s``."""
     toppra = _toppra()
 
     class Clock(toppra.interpolator.AbstractGeometricPath):
@@ -281,11 +288,14 @@ def _clock(lo: float, hi: float) -> Any:
 
         @property
         def path_interval(self) -> np.ndarray:
-            return np.array([lo, hi])
+            return np.array([0.0, 1.0])
 
         def __call__(self, path_positions: Any, order: int = 0) -> np.ndarray:
-            s = np.atleast_1d(np.asarray(path_positions, dtype=float))[:, None]
-            out = s if order == 0 else (np.ones_like(s) if order == 1 else np.zeros_like(s))
+            sigma = np.atleast_1d(np.asarray(path_positions, dtype=float))[:, None]
+            if order == 0:
+                out = lo + span * sigma
+            else:
+                out = np.full_like(sigma, span if order == 1 else 0.0)
             return out[0] if np.ndim(path_positions) == 0 else out
 
     return Clock()
@@ -316,34 +326,55 @@ def _grid(segments: Sequence[Segment], starts: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Profile:
-    """One piece re-timed: toppra's trajectories of ``w`` and of the clock, its duration
-    before the slow-down, and the slow-down factor measured on the dense check."""
+    """One piece re-timed in the scaled variables of :func:`_profile`: toppra's
+    trajectories of ``W`` and of the clock (in ``τ = t/T₀``), their duration in ``τ``,
+    the units ``T₀`` and ``D``, and the slow-down measured on the dense check."""
 
     inputs: Any
     clock: Any
     duration: float
-    slowdown: float
+    unit_time: float
+    unit_input: float
+    slowdown: float = 1.0
+
+    def at(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(s, ũ, dũ/dt)`` at the scaled times ``tau`` (before the slow-down)."""
+        d, t0 = self.unit_input, self.unit_time
+        return (self.clock(tau, 0)[:, 0], self.inputs(tau, 1) * (d / t0),
+                self.inputs(tau, 2) * (d / t0**2))
 
 
-def _slowdown(profile_inputs: Any, times: np.ndarray, bounds: InputBounds) -> float:
-    speed = np.abs(profile_inputs(times, 1))
-    accel = np.abs(profile_inputs(times, 2))
-    ratio_v = float(np.max(speed / np.asarray(bounds.speed)[None, :]))
-    ratio_a = float(np.max(accel / np.asarray(bounds.accel)[None, :]))
+def _slowdown(profile: _Profile, tau: np.ndarray, bounds: InputBounds) -> float:
+    """``c ≥ 1`` such that ``t ↦ c t`` brings the samples at ``tau`` within the bounds."""
+    _, speed, accel = profile.at(tau)
+    ratio_v = float(np.max(np.abs(speed) / np.asarray(bounds.speed)[None, :]))
+    ratio_a = float(np.max(np.abs(accel) / np.asarray(bounds.accel)[None, :]))
     return max(1.0, ratio_v, math.sqrt(ratio_a))
 
 
 def _profile(segments: Sequence[Segment], starts: np.ndarray, bounds: InputBounds) -> _Profile:
+    """TOPP-RA on one piece, in scaled variables so that its numbers are of order one
+    whatever the size of the piece (the corrections at the end of a plan move by 1e-8):
+    ``σ = (s − s₀)/d ∈ [0, 1]``, ``W = w/D`` (``D = d·max|u|``, so ``|dW/dσ| ≤ 1``),
+    ``τ = t/T₀`` with ``T₀ = √(D / min A)``; the bounds become ``V T₀/D`` and
+    ``A T₀²/D`` (``min A`` of them is 1)."""
     toppra = _toppra()
-    path = _input_path(segments, starts)
-    grid = _grid(segments, starts)
-    constraints: list[Any] = [toppra.constraint.JointAccelerationConstraint(
-        np.array(bounds.accel))]
+    span = float(starts[-1] - starts[0])
+    biggest = max(float(np.max(np.abs(s.values(np.linspace(0, s.duration, 33)))))
+                  for s in segments)
+    unit_input = span * biggest
+    unit_time = math.sqrt(unit_input / min(bounds.accel))
+    path = _input_path(segments, starts, unit_input)
+    grid = (_grid(segments, starts) - starts[0]) / span
+    grid[0], grid[-1] = 0.0, 1.0
+    accel = np.asarray(bounds.accel) * (unit_time**2 / unit_input)
+    constraints: list[Any] = [toppra.constraint.JointAccelerationConstraint(accel)]
     if any(math.isfinite(v) for v in bounds.speed):
-        finite = max(v for v in bounds.speed if math.isfinite(v))
         # an unbounded input: a bound it never reaches (toppra takes finite limits only)
-        speed = [v if math.isfinite(v) else 1e12 * finite for v in bounds.speed]
-        constraints.insert(0, toppra.constraint.JointVelocityConstraint(np.array(speed)))
+        finite = max(v for v in bounds.speed if math.isfinite(v))
+        speed = np.array([v if math.isfinite(v) else 1e6 * finite for v in bounds.speed])
+        constraints.insert(0, toppra.constraint.JointVelocityConstraint(
+            speed * (unit_time / unit_input)))
     algorithm = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid,
                                         solver_wrapper="seidel",
                                         parametrizer="ParametrizeConstAccel")
@@ -352,16 +383,19 @@ def _profile(segments: Sequence[Segment], starts: np.ndarray, bounds: InputBound
     if sd is None or not np.all(np.isfinite(sd)):
         raise PlanningError(
             "TOPP-RA found no time parametrisation of the plan under the input bounds "
-            f"(piece of plan time {starts[0]:.6g} to {starts[-1]:.6g})")
+            f"(the piece of plan time {starts[0]:.6g} to {starts[-1]:.6g})")
     sd = np.maximum(np.asarray(sd, dtype=float), 0.0)
     sd[0] = sd[-1] = 0.0
-    inputs = toppra.parametrizer.ParametrizeConstAccel(path, grid, sd)
-    clock = toppra.parametrizer.ParametrizeConstAccel(_clock(starts[0], starts[-1]), grid, sd)
-    duration = float(clock.duration)
+    profile = _Profile(toppra.parametrizer.ParametrizeConstAccel(path, grid, sd),
+                       toppra.parametrizer.ParametrizeConstAccel(_clock(starts[0], span),
+                                                                 grid, sd),
+                       0.0, unit_time, unit_input)
+    duration = float(profile.clock.duration)
     if not (math.isfinite(duration) and duration > 0):
         raise PlanningError("TOPP-RA gave a time parametrisation of no positive duration")
     check = np.linspace(0.0, duration, CHECK_FACTOR * (grid.size - 1) + 1)
-    return _Profile(inputs, clock, duration, _slowdown(inputs, check, bounds))
+    profile = dataclasses.replace(profile, duration=duration)
+    return dataclasses.replace(profile, slowdown=_slowdown(profile, check, bounds))
 
 
 # --- the re-timed trajectory ---------------------------------------------------------------
@@ -484,17 +518,18 @@ def retime(
         piece = segs[a:b]
         moving = max(float(np.max(np.abs(s.values(np.linspace(0, s.duration, 17)))))
                      for s in piece)
-        if moving <= JUMP_FRACTION * max(1.0, scale):
+        if moving <= REST_FRACTION * scale:
             profiles.append((starts[a], starts[b], None))  # no motion: skipped
             continue
         profiles.append((starts[a], starts[b], _profile(piece, starts[a:b + 1], bounds)))
     moving_profiles = [p for _, _, p in profiles if p is not None]
     if not moving_profiles:
         raise OptionError("the plan does not move (every input is 0): nothing to re-time")
-    total = sum(p.duration * p.slowdown for p in moving_profiles)
+    total = sum(p.duration * p.unit_time * p.slowdown for p in moving_profiles)
     if step is None:
         step = total / DEFAULT_SAMPLES
-    count = sum(math.ceil(p.duration * p.slowdown / step) + 1 for p in moving_profiles)
+    count = sum(math.ceil(p.duration * p.unit_time * p.slowdown / step) + 1
+                for p in moving_profiles)
     if count > MAX_SAMPLES:
         raise ComputationLimitError(
             f"the re-timed trajectory of duration {total:.4g} would have {count:,} samples "
@@ -508,14 +543,15 @@ def retime(
     for _lo, _hi, p in profiles:
         if p is None:
             continue
-        k = max(2, math.ceil(p.duration * p.slowdown / step) + 1)
-        tk = np.linspace(0.0, p.duration, k)
-        c = max(p.slowdown, _slowdown(p.inputs, tk, bounds))
+        k = max(2, math.ceil(p.duration * p.unit_time * p.slowdown / step) + 1)
+        tau = np.linspace(0.0, p.duration, k)
+        c = max(p.slowdown, _slowdown(p, tau, bounds))
         first = 0 if not times else 1  # the shared stop is the previous piece's last sample
-        times.append(clock + c * tk[first:])
-        plan_times.append(p.clock(tk[first:], 0)[:, 0])
-        inputs.append(p.inputs(tk[first:], 1) / c)
-        accels.append(p.inputs(tk[first:], 2) / c**2)
+        s_k, u_k, du_k = p.at(tau[first:])
+        times.append(clock + c * p.unit_time * tau[first:])
+        plan_times.append(s_k)
+        inputs.append(u_k / c)
+        accels.append(du_k / c**2)
         clock = float(times[-1][-1])
         stops.append(clock)
     t_all = np.concatenate(times)
