@@ -180,6 +180,7 @@ def test_per_input_and_partial_speed_bounds(planned):
     (1.0, {"u1": 1.0}, "must bound every input"),
     (1.0, None, "needs max_accel"),
     (None, math.inf, "finite number > 0"),
+    (1e-300, 1.0, "between 1e-09 and 1e"),
     ([1.0], 1.0, "1 bounds given for 2 inputs"),
 ])
 def test_bad_bounds_are_refused_before_planning(speed, accel, message):

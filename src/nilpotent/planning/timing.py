@@ -63,6 +63,9 @@ __all__ = [
 #: Vehicle models and their drive input (0-based): the forward speed, whose sign
 #: changes are the vehicle's reversals (``car-trailers:K`` for every ``K``).
 DRIVE_INPUTS: dict[str, int] = {"car": 0, "unicycle": 0, "car-trailers": 0}
+#: The range of a bound (model units per unit time, or per unit time squared): TOPP-RA's
+#: sets are computed on squared path speeds, which leave the doubles' range far out.
+MIN_BOUND, MAX_BOUND = 1e-9, 1e6
 #: A value ``|u_i|`` below this fraction of ``max |u_i|`` over the plan has no sign
 #: (reversals are counted between values above it).
 REVERSAL_FRACTION = 1e-6
@@ -104,8 +107,8 @@ def bound_values(
     Raises
     ------
     OptionError
-        A bound that is not a number > 0 (finite with ``every``), an unknown input
-        name, ``m`` numbers expected and another count given, an input left out with
+        A bound that is not a number > 0 (finite with ``every``) or is outside
+        [:data:`MIN_BOUND`, :data:`MAX_BOUND`], an unknown input name, ``m`` numbers expected and another count given, an input left out with
         ``every``.
     """
     names = input_names(m)
@@ -136,6 +139,9 @@ def bound_values(
         number = float(v)
         if not (number > 0 and (math.isfinite(number) or (number == math.inf and not every))):
             raise OptionError(f"{option}: a bound must be a finite number > 0, got {v}")
+        if math.isfinite(number) and not MIN_BOUND <= number <= MAX_BOUND:
+            raise OptionError(
+                f"{option}: a bound must be between {MIN_BOUND:g} and {MAX_BOUND:g}, got {v}")
     return tuple(float(v) for v in values)
 
 
