@@ -108,8 +108,8 @@ def bound_values(
     ------
     OptionError
         A bound that is not a number > 0 (finite with ``every``) or is outside
-        [:data:`MIN_BOUND`, :data:`MAX_BOUND`], an unknown input name, ``m`` numbers expected and another count given, an input left out with
-        ``every``.
+        [:data:`MIN_BOUND`, :data:`MAX_BOUND`], an unknown input name, ``m`` numbers
+        expected and another count given, an input left out with ``every``.
     """
     names = input_names(m)
     if isinstance(value, Mapping):
