@@ -3,7 +3,7 @@ r"""How the error of the nilpotent approximation scales with the loop amplitude.
 :func:`scaling_study` → :class:`ScalingStudy`: the errors of
 :func:`~nilpotent.simulation.comparison.compare_bracket_motion` over a range of
 amplitudes (one batch through the pair engine) and their fitted log–log slopes
-per weight group (expected $w_j + 1$, MATH.md §6 — measured here, not assumed;
+per weight group (expected $w_j + 1$, the mathematics page, §6 — measured here, not assumed;
 :mod:`nilpotent.numeric.fits`).
 """
 
@@ -56,7 +56,7 @@ class ScalingStudy:
         $\log A$, or ``None`` where fewer than two errors are above the
         integration noise floor (the approximation is exact there).
     expected_slopes:
-        weight $w$ → $w + 1$ (MATH.md §6).
+        weight $w$ → $w + 1$ (the mathematics page, §6).
     floor:
         The noise floor used: errors below it are not fitted.
     tolerance:
