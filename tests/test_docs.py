@@ -25,8 +25,7 @@ _LINK = re.compile(r"\[[^\]\n]*\]\((?P<target>[^)\s]+)\)")
 
 
 def _doc_sources() -> list[Path]:
-    """The pages of the site and the README (``docs/hooks`` is code that rewrites the
-    docstrings' mentions of the design notes, so it names them on purpose)."""
+    """The pages of the site and the README."""
     pages = [p for p in (ROOT / "docs").rglob("*") if p.suffix in (".md", ".ipynb")]
     return [*sorted(pages), ROOT / "README.md"]
 
@@ -46,8 +45,8 @@ def _prose(path: Path) -> str:
     return _CODE_OR_MATH.sub(" ", text)
 
 
-def _generated_pages() -> set[str]:
-    """The pages ``docs/hooks/generated_pages.py`` adds when the site is built."""
+def _hook():
+    """The site's hook, ``docs/hooks/generated_pages.py``, as a module."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location(
@@ -56,6 +55,12 @@ def _generated_pages() -> set[str]:
     assert spec and spec.loader
     hook = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(hook)
+    return hook
+
+
+def _generated_pages() -> set[str]:
+    """The pages ``docs/hooks/generated_pages.py`` adds when the site is built."""
+    hook = _hook()
     api = {f"api/{key}.md" for key, *_ in hook.API_TOPICS} | {"api/index.md"}
     return {"cli.md", "tutorial-notebook.md", *api}
 
@@ -69,6 +74,40 @@ def test_docs_and_readme_name_nothing_outside_the_repository():
         if needle in line
     ]
     assert found == []
+
+
+def test_the_code_names_no_design_note_outside_the_repository():
+    """The docstrings (shown by ``help()`` and on the API pages), the messages and the
+    examples name the site's pages, never the project's design notes."""
+    sources = [*(ROOT / "src").rglob("*.py"), *(ROOT / "examples").rglob("*.py")]
+    found = [
+        f"{path.relative_to(ROOT)}:{n}: {needle}"
+        for path in sorted(sources)
+        for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        for needle in _OUTSIDE
+        if needle in line
+    ]
+    assert found == []
+
+
+def test_the_docstrings_mentions_of_sections_exist():
+    """``the mathematics page, §N`` and ``the interface page, "Heading"`` in the code name
+    a section that exists (the site's hook links them, and fails the build otherwise)."""
+    hook = _hook()
+    math, interface, _ = hook._headings()
+    assert set(math) == {str(k) for k in range(1, len(math) + 1)} and len(math) >= 8
+    found, missing = 0, []
+    for path in sorted((ROOT / "src").rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        for m in hook._PAGE_REF.finditer(text):
+            found += 1
+            if m.group("section") and m.group("section") not in math:
+                missing.append(f"{path.relative_to(ROOT)}: {m.group(0)}")
+            heading = m.group("heading")
+            if heading and " ".join(heading.split()) not in interface:
+                missing.append(f"{path.relative_to(ROOT)}: {m.group(0)}")
+    assert missing == []
+    assert found > 20
 
 
 def test_every_relative_link_of_the_docs_and_readme_resolves():
