@@ -154,6 +154,57 @@ def test_mentions_of_other_pages_are_links_not_file_names():
     assert found == []
 
 
+_CODE = re.compile(r"^(?P<f>```|~~~).*?^(?P=f)|`[^`\n]*`", re.DOTALL | re.MULTILINE)
+_FORMULA = re.compile(r"\$\$(?P<display>.+?)\$\$|\$(?P<inline>[^$\n]+)\$", re.DOTALL)
+
+
+def _formulas(path: Path) -> list[str]:
+    """The ``$...$`` and ``$$...$$`` formulas of a page (of a notebook, of its markdown),
+    outside code."""
+    text = path.read_text(encoding="utf-8")
+    if path.suffix == ".ipynb":
+        cells = json.loads(text)["cells"]
+        text = "\n\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "markdown")
+    text = _CODE.sub(" ", text)
+    return [m.group("display") or m.group("inline") for m in _FORMULA.finditer(text)]
+
+
+def _mathml_problems(latex: str) -> list[str]:
+    """What ``latex2mathml`` (the site's typesetter) silently gets wrong: a command it
+    does not know left as text, ``&`` outside an ``array``/matrix (``aligned``) as a
+    letter, a fence with a subscript (``\\end{pmatrix}_{i}``)."""
+    from nilpotent.typeset import mathml
+
+    try:
+        out = mathml(latex, display=True)
+    except Exception as exc:  # the site would show the source
+        return [f"{type(exc).__name__}: {exc}"]
+    text = re.sub(r"<annotation.*?</annotation>", "", out, flags=re.DOTALL)
+    problems = [f"raw {t!r}" for t in re.findall(r">([^<]*\\[A-Za-z]+[^<]*)<", text)]
+    if re.search(r"<mi>&(?:amp;)?</mi>", text):
+        problems.append("'&' as a letter")
+    if re.search(r"<msub><mo>[^<]*</mo><mtable>", text):
+        problems.append("a subscript on a fence")
+    return problems
+
+
+def test_every_formula_of_the_docs_typesets():
+    found, bad = 0, []
+    for path in _doc_sources():
+        for latex in _formulas(path):
+            found += 1
+            where = f"{path.relative_to(ROOT)}: ${latex[:60]}$"
+            bad += [f"{where}: {p}" for p in _mathml_problems(latex)]
+    assert bad == []
+    assert found > 500  # derivations are typeset, not code
+
+
+def test_the_formula_check_sees_what_the_typesetter_gets_wrong():
+    assert _mathml_problems(r"[X, Y] = DY\cdot X - DX\cdot Y") == []
+    assert _mathml_problems(r"\begin{aligned} a &= b \end{aligned}") != []
+    assert _mathml_problems(r"\det\begin{pmatrix} a & b \end{pmatrix}_{i}") != []
+
+
 def test_tutorial_notebook_is_stored_without_outputs():
     nb = json.loads((ROOT / "docs" / "tutorial.ipynb").read_text(encoding="utf-8"))
     code = [c for c in nb["cells"] if c["cell_type"] == "code"]
