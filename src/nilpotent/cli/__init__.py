@@ -95,7 +95,7 @@ def _interrupted(as_json: bool) -> int:
 
 def _internal_error(exc: BaseException, as_json: bool, debug: bool) -> int:
     # no report address: the project publishes none (pyproject.toml has no [project.urls])
-    from nilpotent import __version__
+    from nilpotent.version import __version__
 
     what = f"{type(exc).__name__}: {literal(exc, 300)}"
     message = (
