@@ -130,12 +130,25 @@ def scaling_study(
 
     Parameters
     ----------
-    sys, bracket, omega, periods, point : see :func:`compare_bracket_motion`
-        The system, the bracket ``(I, J)`` and the input's frequency, periods, start.
-    approximation, samples, settings, rtol, atol, engine : see :func:`compare_bracket_motion`
-        The approximation to compare with, samples per run, how to integrate
-        (default :data:`~nilpotent.simulation.comparison.BRACKET_SETTINGS`;
-        ``rtol``/``atol``/``engine``: the loose form, kept for one release).
+    sys : ControlSystem
+        The original system.
+    bracket : tuple of int
+        ``(I, J)``, 1-based, different.
+    omega : float
+        The input's frequency (as in :func:`compare_bracket_motion`).
+    periods : int
+        Periods of the input.
+    point : sequence or mapping, optional
+        The start $p$ (default the origin).
+    approximation : NilpotentApproximation, optional
+        The approximation to compare with (default: the one at ``point``).
+    samples : int
+        Sample times per run.
+    settings : IntegrationSettings or None
+        How to integrate (default
+        :data:`~nilpotent.simulation.comparison.BRACKET_SETTINGS`).
+    rtol, atol, engine : optional
+        The loose form of ``settings``, kept for one release.
     amplitudes : sequence of float
         Positive amplitudes, at least two different values.
 
