@@ -170,7 +170,7 @@ class GlobalPlan(PlanFigure):
         return self.plan._repr_html_()
 
     def to_json(self) -> dict[str, Any]:
-        """``nilpotent/plan@1`` (INTERFACE.md) with ``world``, ``limits``, ``waypoints``,
+        """``nilpotent/plan@1`` (the interface page) with ``world``, ``limits``, ``waypoints``,
         ``clearance``, ``limits_ok``, ``min_singular_margin`` and more; no NaN/Infinity
         (undefined numbers are null, ``null_reasons`` says why)."""
         v = self.verification
