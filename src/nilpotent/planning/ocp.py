@@ -309,6 +309,15 @@ def _problem(ca: Any, system: ControlSystem, n_int: int) -> Any:
     return ca.Function("step", [x, u], [z, ca.horzcat(*subs)])
 
 
+def _pads(lo: float, hi: float, ends: np.ndarray) -> tuple[float, float]:
+    """How much the limits ``[lo, hi]`` are tightened: :data:`LIMIT_MARGIN` (times
+    ``max(1, hi − lo)``), less where the start or the goal (values ``ends``) is closer to
+    the limit (an end on a limit keeps it exactly, or the problem would be infeasible)."""
+    pad = LIMIT_MARGIN * max(1.0, hi - lo)
+    return (max(0.0, min(pad, float(np.min(ends)) - lo)),
+            max(0.0, min(pad, hi - float(np.max(ends)))))
+
+
 def _solve(
     ca: Any, system: ControlSystem, checker: Checker, x0: np.ndarray, xg: np.ndarray,
     u0: np.ndarray, n_int: int,
@@ -334,13 +343,15 @@ def _solve(
     names = system.coordinate_names
     for name, lo, hi in limits.bounds:
         j = names.index(name)
-        pad = LIMIT_MARGIN * max(1.0, hi - lo)
-        opti.subject_to(opti.bounded(lo + pad, subs[j, :], hi - pad))
+        ends = np.array([x0[j], xg[j]])
+        pad_lo, pad_hi = _pads(lo, hi, ends)
+        opti.subject_to(opti.bounded(lo + pad_lo, subs[j, :], hi - pad_hi))
     if rel is not None:
         values = rel.map(subs.shape[1])(subs)
+        at_ends = np.array(rel.map(2)(np.column_stack([x0, xg])), dtype=float)
         for r, (_, _, lo, hi) in enumerate(limits.relative):
-            pad = LIMIT_MARGIN * max(1.0, hi - lo)
-            opti.subject_to(opti.bounded(lo + pad, values[r, :], hi - pad))
+            pad_lo, pad_hi = _pads(lo, hi, at_ends[r])
+            opti.subject_to(opti.bounded(lo + pad_lo, values[r, :], hi - pad_hi))
     # warm start: the nilpotent plan's controls and their RK4 roll-out
     roll = step.mapaccum(n_int)(x0, u0)
     states = np.hstack([x0[:, None], np.array(roll[0])])
