@@ -514,9 +514,11 @@ def _plan_global(
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
         refinement = refine_route(refine, checker, x0, xg, segments, tol, engine)
+        v = None
         if refinement is not None and refinement[1].applied:
-            segments = refinement[0]
-        v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
+            segments, v = refinement[0], refinement[1].verification  # verified as below
+        if v is None:
+            v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "

@@ -54,7 +54,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -71,7 +71,8 @@ from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment, constant_segment
 from nilpotent.planning.geodesic import control_length
 from nilpotent.planning.simulation import simulate_candidates
-from nilpotent.planning.verify import Checker, verify_segments
+from nilpotent.planning.verify import Checker, Verification, verify_segments
+from nilpotent.strict_json import json_object
 
 __all__ = [
     "INTERVALS", "REFINEMENTS", "Refinement", "check_refine", "refine_route", "refine_segments",
@@ -122,6 +123,9 @@ class Refinement:
         Distance to the goal of the re-simulated refined controls.
     seconds : float
         Wall-clock time of the refinement, verification included.
+    verification : Verification or None
+        The dense re-simulation of the refined controls when they were applied (the
+        plan's own verification; not in :meth:`to_json`).
     """
 
     method: str
@@ -134,16 +138,17 @@ class Refinement:
     solver_iterations: int = 0
     refined_error: float | None = None
     seconds: float = 0.0
+    verification: Verification | None = field(default=None, repr=False, compare=False)
 
     def to_json(self) -> dict[str, Any]:
-        """The fields as a dict (floats may be non-finite: the plan's encoder nulls them)."""
-        return {
+        """The fields as a strict-JSON dict (:func:`nilpotent.strict_json.json_object`)."""
+        return json_object({
             "method": self.method, "applied": self.applied, "reason": self.reason,
             "length_before": self.length_before, "length_refined": self.length_refined,
             "intervals": self.intervals, "solver_status": self.solver_status,
             "solver_iterations": self.solver_iterations, "refined_error": self.refined_error,
             "seconds": self.seconds,
-        }
+        })
 
 
 def _casadi() -> Any:
@@ -492,7 +497,7 @@ def refine_segments(
     if not after < before:
         return keep(f"not shorter: {after:.6g} against {before:.6g}", **solved)
     return refined, Refinement("ocp", True, "", before, intervals=intervals,
-                               seconds=time.perf_counter() - t0, **solved)
+                               seconds=time.perf_counter() - t0, verification=v, **solved)
 
 
 def refine_route(
