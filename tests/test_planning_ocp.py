@@ -10,6 +10,7 @@ numerical evaluation.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import sys
@@ -27,12 +28,13 @@ from nilpotent.planning import plan
 from nilpotent.planning.controls import constant_segment
 from nilpotent.planning.geodesic import control_length
 from nilpotent.planning.global_planner import plan_global
+from nilpotent.planning.ocp import INTERVALS, check_refine, refine_segments, to_casadi
 from nilpotent.planning.verify import Checker
 from replay import resimulate
 
-ca = pytest.importorskip("casadi")
-
-from nilpotent.planning.ocp import INTERVALS, check_refine, refine_segments, to_casadi  # noqa: E402
+# the `ocp` extra (part of the `test` extra); the missing-extra tests need no CasADi
+needs_casadi = pytest.mark.skipif(importlib.util.find_spec("casadi") is None,
+                                  reason='needs pip install "nilpotent[ocp]"')
 
 
 def heisenberg_distance(x1: float, x2: float, x3: float) -> float:
@@ -60,7 +62,10 @@ def segment_dicts(segments) -> list[dict]:
     return [s.to_dict() for s in segments]
 
 
+@needs_casadi
 def test_translation_agrees_with_sympy() -> None:
+    import casadi as ca
+
     x, y = sp.symbols("x y")
     exprs = [
         sp.sin(x) * sp.cos(y) - sp.tan(x) / 3, sp.exp(x) * sp.log(2 + y**2),
@@ -78,7 +83,10 @@ def test_translation_agrees_with_sympy() -> None:
             assert float(fn(a, b)) == pytest.approx(want, rel=1e-12, abs=1e-12), expr
 
 
+@needs_casadi
 def test_translation_refuses_what_it_cannot_express() -> None:
+    import casadi as ca
+
     x, p = sp.symbols("x p")
     with pytest.raises(OptionError, match="no coordinate"):
         to_casadi(x * p, {x: ca.SX.sym("x")})
@@ -86,6 +94,7 @@ def test_translation_refuses_what_it_cannot_express() -> None:
         to_casadi(sp.gamma(x), {x: ca.SX.sym("x")})
 
 
+@needs_casadi
 def test_heisenberg_refined_length_is_the_closed_form_distance() -> None:
     h = get_model("heisenberg")
     goal = (0.5, 0.3, 0.4)
@@ -100,6 +109,7 @@ def test_heisenberg_refined_length_is_the_closed_form_distance() -> None:
     assert d * (1 - 1e-9) <= length <= d * (1 + DISCRETISATION)
 
 
+@needs_casadi
 def test_a_shortest_plan_is_not_replaced() -> None:
     """The geodesic plan of Heisenberg is already the shortest (its approximation is the
     system): the piecewise-constant refinement is longer, so the plan stays as it is."""
@@ -114,6 +124,7 @@ def test_a_shortest_plan_is_not_replaced() -> None:
 X1 = sp.Symbol("x1")
 
 
+@needs_casadi
 @pytest.mark.parametrize("limits", [
     Limits((("x1", -0.25, 0.25),)),
     Limits(relative=(("x1^2", X1**2, 0.0, 0.0625),)),  # the same strip, as a relative limit
@@ -139,6 +150,7 @@ def test_limits_are_kept(limits) -> None:
     assert heisenberg_distance(*goal) * (1 + DISCRETISATION) < control_length(segs) < 3.3
 
 
+@needs_casadi
 @pytest.mark.slow
 def test_global_plan_refined_reaches_the_goal_and_is_shorter() -> None:
     system, goal = get_model("unicycle"), (0.3, 0.2, 0.5)
