@@ -184,3 +184,16 @@ def test_cli_missing_casadi_and_unknown_value(run_cli, monkeypatch) -> None:
     assert status == 2
     err = json.loads(stdout)["error"]
     assert err["kind"] == "missing-extra" and "nilpotent[ocp]" in err["message"]
+
+
+@needs_casadi
+def test_a_refinement_that_misses_the_tolerance_is_refused() -> None:
+    """A tolerance below what any re-simulation meets (1e-17: under the rounding of the
+    goal's coordinates): the refined controls are refused and the plan stays, with why."""
+    h = get_model("heisenberg")
+    goal = (0.5, 0.3, 0.4)
+    warm = plan(h, (0, 0, 0), goal)
+    segs, info = refine_segments(Checker(h), (0, 0, 0), goal, warm.segments, 1e-17)
+    assert not info.applied and "miss the goal" in info.reason
+    assert info.length_refined is not None and info.length_refined < info.length_before
+    assert segs == list(warm.segments)
