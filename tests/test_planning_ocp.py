@@ -197,3 +197,21 @@ def test_a_refinement_that_misses_the_tolerance_is_refused() -> None:
     assert not info.applied and "miss the goal" in info.reason
     assert info.length_refined is not None and info.length_refined < info.length_before
     assert segs == list(warm.segments)
+
+
+@needs_casadi
+def test_a_refined_motion_through_an_obstacle_is_refused() -> None:
+    """Obstacles are not constraints of the optimal control problem, only of the
+    verification: the car's straight drive (the shortest motion) through a pillar is
+    found, refused as not admissible, and the plan is kept unchanged."""
+    from nilpotent.planning.world import world_from_dict
+
+    car = get_model("car")
+    world = world_from_dict({"name": "pillar", "bounds": {"x": [-3.0, 9.0], "y": [-4.0, 4.0]},
+                             "obstacles": [{"disc": {"center": [3.0, 0.0], "radius": 0.3}}]})
+    warm = [constant_segment((3.0, 0.0)), constant_segment((3.0, 0.0))]
+    goal = (6.0, 0.0, 0.0, 0.0)
+    segs, info = refine_segments(Checker(car, world), (0, 0, 0, 0), goal, warm, 1e-8)
+    assert not info.applied and "not admissible" in info.reason and "obstacle" in info.reason
+    assert segs == warm
+    assert info.length_refined == pytest.approx(6.0, rel=1e-6)  # the straight drive
