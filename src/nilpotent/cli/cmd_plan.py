@@ -82,6 +82,13 @@ ObjectiveOpt = Annotated[
                       "(shortest geodesics of the step-2 approximation)."),
 ]
 
+RefineOpt = Annotated[
+    str,
+    typer.Option("--refine", metavar="HOW",
+                 help="none (default) or ocp: shorten a direct plan by optimal control of the "
+                      "true system (CasADi + IPOPT; needs pip install \"nilpotent[ocp]\"), "
+                      "kept only if it verifies and is shorter."),
+]
 
 ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
 
@@ -141,6 +148,11 @@ def _print_plan(glob) -> None:
         console.print(f"clearance to obstacles: {v.clearance:.4g}")
     if v.min_singular_margin is not None:
         console.print(f"smallest singular margin: {v.min_singular_margin:.4g}")
+    ref = glob.refinement
+    if ref is not None:
+        console.print(f"refinement ocp: {'applied' if ref.applied else 'not applied'}, length "
+                      f"{ref.length_before:.6g} -> {glob.plan.length:.6g}"
+                      + (f" ({ref.reason})" if ref.reason else ""))
     if glob.timed is not None:
         timed = glob.timed
         console.print(
@@ -168,6 +180,7 @@ def plan_command(
     anchor: AnchorOpt = "auto",
     max_iterations: MaxItOpt = 30,
     objective: ObjectiveOpt = "reach",
+    refine: RefineOpt = "none",
     max_speed: MaxSpeedOpt = None,
     max_accel: MaxAccelOpt = None,
     trajectory_out: TrajectoryOutOpt = None,
@@ -187,6 +200,7 @@ def plan_command(
     """
     from nilpotent.planning.iterative import ANCHORS
     from nilpotent.planning.length import OBJECTIVES
+    from nilpotent.planning.ocp import check_refine
 
     if not (math.isfinite(tol) and tol > 0):
         raise OptionError(f"--tol must be a positive number, got {tol}")
@@ -198,6 +212,7 @@ def plan_command(
     if objective not in OBJECTIVES:
         raise OptionError(
             f"--objective must be {' or '.join(OBJECTIVES)}; got {literal(objective, 60)!r}")
+    check_refine(refine)
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
     if not (math.isfinite(max_piece) and max_piece > 0):
@@ -219,8 +234,8 @@ def plan_command(
         result = plan_from_options(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,
-            clearance=clearance, objective=objective, max_speed=speed, max_accel=accel,
-            trajectory_step=trajectory_step,
+            clearance=clearance, objective=objective, refine=refine, max_speed=speed,
+            max_accel=accel, trajectory_step=trajectory_step,
         )
     write_pictures(result, plot, animate)
     if trajectory_out is not None and result.timed is not None:

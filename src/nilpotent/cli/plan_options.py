@@ -187,7 +187,8 @@ def command_budget(time_limit: float):
 
 def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
                       max_piece, *, anchor="auto", max_iterations=30, clearance=0.0,
-                      objective="reach", max_speed=None, max_accel=None, trajectory_step=None):
+                      objective="reach", refine="none", max_speed=None, max_accel=None,
+                      trajectory_step=None):
     """Load the world, merge the limits and run the global planner (shared with ``execute``)."""
     from nilpotent.planning.global_planner import plan_global
     from nilpotent.planning.world import load_world
@@ -204,6 +205,6 @@ def plan_from_options(system, start, goal, tol, world, limit, singular_margin, t
         system, start, goal, tol, world=the_world, limits=limits,
         singular_margin=singular_margin, time_limit=time_limit, seed=seed,
         max_piece=max_piece, anchor=anchor, max_iterations=max_iterations, clearance=clearance,
-        objective=objective, max_speed=max_speed, max_accel=max_accel,
+        objective=objective, refine=refine, max_speed=max_speed, max_accel=max_accel,
         trajectory_step=trajectory_step,
     )
