@@ -156,6 +156,9 @@ API_SUPPORTING: dict[str, tuple[str, ...]] = {
         "nilpotent.planning.iterative.PlanFigure",
         "nilpotent.viz.plan_world.plot_plan_world",
         "nilpotent.viz.plan_world.animate_plan_world",
+        "nilpotent.planning.timing.TimedTrajectory",
+        "nilpotent.planning.timing.InputBounds",
+        "nilpotent.planning.timing.retime",
     ),
 }
 

@@ -33,6 +33,7 @@ Every returned plan is re-simulated as a whole (:func:`~nilpotent.planning.verif
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import time
@@ -60,6 +61,7 @@ from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory
 from nilpotent.planning.nilpotent import StepTooHighError
 from nilpotent.planning.ocp import Refinement, check_refine, refine_route
 from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.timing import TimedTrajectory, input_bounds, motion_fields, retime
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
 from nilpotent.progress import report as report_progress
@@ -143,6 +145,9 @@ class GlobalPlan(PlanFigure):
     refinement:
         What the optimal-control refinement did (``refine="ocp"`` of :func:`plan_global`:
         :class:`~nilpotent.planning.ocp.Refinement`), or ``None`` when none was asked for.
+    timed:
+        The plan re-timed under the input bounds of :func:`plan_global`
+        (:func:`~nilpotent.planning.timing.retime`), or ``None`` when none were given.
     """
 
     plan: Plan
@@ -158,6 +163,7 @@ class GlobalPlan(PlanFigure):
     seconds: float = field(default=0.0)
     clearance_required: float = 0.0
     refinement: Refinement | None = None
+    timed: TimedTrajectory | None = None
 
     @property
     def error(self) -> float:
@@ -214,6 +220,7 @@ class GlobalPlan(PlanFigure):
             out["world_definition"] = self.world.to_json()
         if self.refinement is not None:
             out["refinement"] = self.refinement.to_json()
+        out.update(motion_fields(self.plan.system, self.plan.segments, self.timed, reasons))
         return plan_json(out, reasons)
 
 
@@ -382,6 +389,9 @@ def plan_global(
     hold_shape: bool = True,
     objective: str = "reach",
     refine: str = "none",
+    max_speed: float | Sequence[float] | dict[str, float] | None = None,
+    max_accel: float | Sequence[float] | dict[str, float] | None = None,
+    trajectory_step: float | None = None,
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -438,6 +448,16 @@ def plan_global(
         obstacles are not constraints of that problem), and the refined controls are
         kept only if they verify and are shorter (:attr:`GlobalPlan.refinement` says
         what happened).
+    max_speed, max_accel:
+        Bounds on the inputs of the re-timed motion, ``|ũ_i| ≤ V_i`` and
+        ``|dũ_i/dt| ≤ A_i``: a number (every input), ``m`` numbers, or
+        ``{"u1": V, ...}`` (a speed bound may leave inputs out: unbounded; an
+        acceleration bound must name them all).  Given, the verified plan is
+        re-timed by TOPP-RA (:func:`~nilpotent.planning.timing.retime`) into
+        :attr:`GlobalPlan.timed`; ``max_speed`` needs ``max_accel``.
+    trajectory_step:
+        Largest time between the samples of the re-timed motion (default: its
+        duration / 500).
 
     Raises
     ------
@@ -455,14 +475,21 @@ def plan_global(
     check_refine(refine)
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
+    bounds = input_bounds(sys.m, max_speed, max_accel, step=trajectory_step)
     with budget.time_budget(time_limit):
-        return _plan_global(
+        result = _plan_global(
             sys, start, goal, tol, world=world, limits=limits,
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
             max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
             path_clearance=path_clearance, hold_shape=hold_shape, objective=objective,
             refine=refine)
+        if bounds is None:
+            return result
+        p = result.plan
+        timed = retime(sys, p.start, p.segments, bounds, step=trajectory_step,
+                       reached=p.reached, engine=engine)
+        return dataclasses.replace(result, timed=timed)
 
 
 def _plan_global(
