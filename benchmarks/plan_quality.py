@@ -28,13 +28,18 @@ length ``∫‖(v, φ̇)‖ dt``, the reversals of ``v`` (sign changes) against 
 Reeds–Shepp path (sign changes of its motion along the heading, sampled), CPU and
 wall seconds per plan.
 
+Last, ``--ocp N`` (default 5; 0 skips it): the refinement by direct optimal control of
+the true system (``refine="ocp"``, :mod:`nilpotent.planning.ocp`, CasADi + IPOPT) of
+N warm-start plans per model (see :func:`ocp_section`).
+
 Usage: ``PYTHONPATH=src python benchmarks/plan_quality.py [--goals 20] [--trident 5]
-[--car 8] [--only-car]``.
+[--car 8] [--only-car] [--ocp 5]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import statistics
 import time
@@ -164,6 +169,7 @@ def main() -> None:
     ap.add_argument("--car", type=int, default=8)
     ap.add_argument("--only-car", action="store_true")
     ap.add_argument("--seed", type=int, default=19)
+    ap.add_argument("--ocp", type=int, default=5)
     args = ap.parse_args()
     if args.only_car:
         car_benchmark(args.car, args.seed)
@@ -222,6 +228,72 @@ def main() -> None:
                   f"{max(ratios):.4f} | {statistics.median(secs):.3f} |")
     if args.car:
         car_benchmark(args.car, args.seed)
+    if args.ocp:
+        ocp_section(goals[: args.ocp], dist[: args.ocp], args.ocp, args.seed)
+
+
+def reversals(segments) -> int:
+    """Sign changes of the drive input ``u1`` (constant segments: one value each)."""
+    signs = [np.sign(s.inputs[0].constant) for s in segments if s.inputs[0].constant != 0]
+    return sum(a != b for a, b in itertools.pairwise(signs))
+
+
+def ocp_cases(goals, dist, count: int, seed: int):
+    """``(model, label, system, goal, warm plan, exact distance or None)`` per case: the
+    Heisenberg goals (warm start: the loops, ``reach``), seeded unicycle goals and the
+    trident snake's small goals (warm start: ``--objective length``), and the car shifted
+    sideways by 1 (warm start: the global plan, the route ``nilpotent plan car`` takes)."""
+    from nilpotent.planning.global_planner import plan_global
+
+    rng = np.random.default_rng(seed + 1)
+    h = get_model("heisenberg")
+    for g, d in zip(goals, dist, strict=True):
+        yield "heisenberg", "reach", h, tuple(g), plan(h, (0, 0, 0), g).segments, d
+    uni = get_model("unicycle")
+    for _ in range(count):
+        g = tuple(rng.uniform(-0.5, 0.5, size=3))
+        yield "unicycle", "length", uni, g, plan(uni, (0, 0, 0), g, objective="length").segments, \
+            None
+    car = get_model("car")
+    g = (0.0, 1.0, 0.0, 0.0)
+    yield "car (y=1)", "reach, global", car, g, plan_global(car, (0,) * 4, g).plan.segments, None
+    tri = get_model("trident-snake")
+    for _ in range(max(1, count // 2)):
+        g = tuple(rng.uniform(-0.15, 0.15, size=6))
+        yield "trident-snake", "length", tri, g, \
+            plan(tri, (0,) * 6, g, objective="length").segments, None
+
+
+def ocp_section(goals, dist, count: int, seed: int) -> None:
+    """``refine="ocp"``: length before/after, ratio to the exact distance (Heisenberg) or
+    to ``lower_bound`` (the approximation's distance, :func:`length_report`), time of the
+    refinement (IPOPT, endpoint correction and verification; the warm plan not counted)."""
+    from nilpotent.planning.length import length_report
+    from nilpotent.planning.ocp import refine_segments
+    from nilpotent.planning.verify import Checker
+
+    print("\n## refinement by direct optimal control (--refine ocp), true models")
+    print("| model | warm start | length before | length after | ratio before | ratio after "
+          "| bound | applied | s/refinement |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, label, system, goal, warm, d in ocp_cases(goals, dist, count, seed):
+        start = (0.0,) * system.n
+        (segs, info), dt = timed(refine_segments, Checker(system), start, goal, warm, 1e-8)
+        before, after = control_length(warm), control_length(segs)
+        bound = d if d is not None else length_report(system, start, goal, segs)[0][
+            "lower_bound"]
+        kind = "exact d" if d is not None else ("lower_bound" if bound else "none")
+        rb = f"{before / bound:.4f}" if bound else "-"
+        ra = f"{after / bound:.4f}" if bound else "-"
+        extra = ""
+        if system.name == "car":
+            from nilpotent.planning.simulation import simulate_path  # rear-axle path vs RS
+
+            _, states = simulate_path(system, start, segs, 50)
+            path = float(np.sum(np.linalg.norm(np.diff(states[:, :2], axis=0), axis=1)))
+            extra = f" (rear-axle path {path:.3f}, {reversals(segs)} reversals; RS 2.64)"
+        print(f"| {name} | {label} | {before:.4f} | {after:.4f}{extra} | {rb} | {ra} | {kind} "
+              f"| {info.applied} | {dt:.2f} |")
 
 
 if __name__ == "__main__":

@@ -36,12 +36,17 @@ from nilpotent.cli.plan_options import (
     FromOpt,
     LimitOpt,
     MarginOpt,
+    MaxAccelOpt,
     MaxPieceOpt,
+    MaxSpeedOpt,
     SeedOpt,
     TimeLimitOpt,
     ToOpt,
+    TrajectoryOutOpt,
+    TrajectoryStepOpt,
     WorldOpt,
     command_budget,
+    parse_bound_option,
     plan_from_options,
 )
 from nilpotent.errors import OptionError
@@ -78,6 +83,13 @@ ObjectiveOpt = Annotated[
                       "for step 2, shooting above)."),
 ]
 
+RefineOpt = Annotated[
+    str,
+    typer.Option("--refine", metavar="HOW",
+                 help="none (default) or ocp: shorten a direct plan by optimal control of the "
+                      "true system (CasADi + IPOPT; needs pip install \"nilpotent[ocp]\"), "
+                      "kept only if it verifies and is shorter."),
+]
 
 ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
 
@@ -137,6 +149,16 @@ def _print_plan(glob) -> None:
         console.print(f"clearance to obstacles: {v.clearance:.4g}")
     if v.min_singular_margin is not None:
         console.print(f"smallest singular margin: {v.min_singular_margin:.4g}")
+    ref = glob.refinement
+    if ref is not None:
+        console.print(f"refinement ocp: {'applied' if ref.applied else 'not applied'}, length "
+                      f"{ref.length_before:.6g} -> {glob.plan.length:.6g}"
+                      + (f" ({ref.reason})" if ref.reason else ""))
+    if glob.timed is not None:
+        timed = glob.timed
+        console.print(
+            f"re-timed (TOPP-RA): duration {timed.duration:.4g}, {timed.times.size} samples, "
+            f"{len(timed.stops)} stops; max |u| {float(abs(timed.inputs).max()):.4g}")
     verdict = "reached" if v.error <= result.tol else "NOT reached"
     console.print(f"goal {verdict}: error {v.error:.3e} (tol {result.tol:g}; re-simulated)")
 
@@ -159,6 +181,11 @@ def plan_command(
     anchor: AnchorOpt = "auto",
     max_iterations: MaxItOpt = 30,
     objective: ObjectiveOpt = "reach",
+    refine: RefineOpt = "none",
+    max_speed: MaxSpeedOpt = None,
+    max_accel: MaxAccelOpt = None,
+    trajectory_out: TrajectoryOutOpt = None,
+    trajectory_step: TrajectoryStepOpt = None,
     plot: PlotOpt = None,
     animate: AnimateOpt = None,
     json_out: JsonOpt = False,
@@ -174,6 +201,7 @@ def plan_command(
     """
     from nilpotent.planning.iterative import ANCHORS
     from nilpotent.planning.length import OBJECTIVES
+    from nilpotent.planning.ocp import check_refine
 
     if not (math.isfinite(tol) and tol > 0):
         raise OptionError(f"--tol must be a positive number, got {tol}")
@@ -185,21 +213,35 @@ def plan_command(
     if objective not in OBJECTIVES:
         raise OptionError(
             f"--objective must be {' or '.join(OBJECTIVES)}; got {literal(objective, 60)!r}")
+    check_refine(refine)
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
     if not (math.isfinite(max_piece) and max_piece > 0):
         raise OptionError(f"--max-piece must be a positive number, got {max_piece}")
     _check_outputs(plot, animate)
+    check_writable(trajectory_out, "--trajectory-out")
     system = load_model_option(model, param)
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
+    speed = parse_bound_option(max_speed, system, "--max-speed")
+    accel = parse_bound_option(max_accel, system, "--max-accel", every=True)
+    if accel is None and (speed is not None or trajectory_out is not None
+                          or trajectory_step is not None):
+        given = "--max-speed" if speed is not None else (
+            "--trajectory-out" if trajectory_out is not None else "--trajectory-step")
+        raise OptionError(f"{given} needs --max-accel (the re-timed inputs are continuous "
+                          "only with bounded accelerations)")
     with work(f"plan {system.name}"), command_budget(time_limit):
         result = plan_from_options(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,
-            clearance=clearance, objective=objective,
+            clearance=clearance, objective=objective, refine=refine, max_speed=speed,
+            max_accel=accel, trajectory_step=trajectory_step,
         )
     write_pictures(result, plot, animate)
+    if trajectory_out is not None and result.timed is not None:
+        with write_atomically(trajectory_out) as tmp:
+            tmp.write_text(result.timed.to_csv(), encoding="utf-8")
     if json_out:
         emit_json(result.to_json())
         return

@@ -9,7 +9,7 @@ The metric makes ``X̂_1..X̂_m`` orthonormal: the length of a control is
     \dot h = B u, \qquad \dot v = \sum_i u_i A_i h,
 
 ``B`` (``n₁×m``) the constant weight-1 components, ``A_i`` (``n₂×n₁``) the
-linear weight-2 components of ``X̂_i`` (MATH.md §5: ``P_ij`` is homogeneous of
+linear weight-2 components of ``X̂_i`` (the mathematics page, §5: ``P_ij`` is homogeneous of
 weighted degree ``w_j − 1``).
 
 **Normal geodesics** (Pontryagin, ``H = ½Σ_i u_i²``, ``u_i = ⟨p, X̂_i(y)⟩``):
@@ -377,7 +377,7 @@ def _contact_starts(st: Step2Structure, u_line: np.ndarray, resid: float) -> lis
 
     In the plane ``(∫u₁, ∫u₂)`` (where the metric is Euclidean) a geodesic is a
     circular arc; a loop of signed area ``a`` moves ``v`` by ``a·κ``,
-    ``κ = [X̂₁, X̂₂]_v`` (MATH.md §1).  The area ``a = resid/κ`` between arc
+    ``κ = [X̂₁, X̂₂]_v`` (the mathematics page, §1).  The area ``a = resid/κ`` between arc
     and chord (``ρ = ‖u_line‖``) fixes the arc's angle θ:
     ``|a|/ρ² = (θ − sin θ)/(8 sin²(θ/2))``; the length is ``ρθ / (2 sin(θ/2))``
     (``√(4π|a|)`` for ``ρ = 0``).  Both rotation senses are offered; the

@@ -33,6 +33,7 @@ Every returned plan is re-simulated as a whole (:func:`~nilpotent.planning.verif
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import time
@@ -58,7 +59,9 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
+from nilpotent.planning.ocp import Refinement, check_refine, refine_route
 from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.timing import TimedTrajectory, input_bounds, motion_fields, retime
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
 from nilpotent.progress import report as report_progress
@@ -139,6 +142,12 @@ class GlobalPlan(PlanFigure):
     clearance_required:
         The distance robot–obstacles the motion had to exceed (``clearance`` of
         :func:`plan_global`; model length units).
+    refinement:
+        What the optimal-control refinement did (``refine="ocp"`` of :func:`plan_global`:
+        :class:`~nilpotent.planning.ocp.Refinement`), or ``None`` when none was asked for.
+    timed:
+        The plan re-timed under the input bounds of :func:`plan_global`
+        (:func:`~nilpotent.planning.timing.retime`), or ``None`` when none were given.
     """
 
     plan: Plan
@@ -153,6 +162,8 @@ class GlobalPlan(PlanFigure):
     time_limit: float = math.inf
     seconds: float = field(default=0.0)
     clearance_required: float = 0.0
+    refinement: Refinement | None = None
+    timed: TimedTrajectory | None = None
 
     @property
     def error(self) -> float:
@@ -170,7 +181,7 @@ class GlobalPlan(PlanFigure):
         return self.plan._repr_html_()
 
     def to_json(self) -> dict[str, Any]:
-        """``nilpotent/plan@1`` (INTERFACE.md) with ``world``, ``limits``, ``waypoints``,
+        """``nilpotent/plan@1`` (the interface page) with ``world``, ``limits``, ``waypoints``,
         ``clearance``, ``limits_ok``, ``min_singular_margin`` and more; no NaN/Infinity
         (undefined numbers are null, ``null_reasons`` says why)."""
         v = self.verification
@@ -207,6 +218,9 @@ class GlobalPlan(PlanFigure):
         })
         if self.world is not None:
             out["world_definition"] = self.world.to_json()
+        if self.refinement is not None:
+            out["refinement"] = self.refinement.to_json()
+        out.update(motion_fields(self.plan.system, self.plan.segments, self.timed, reasons))
         return plan_json(out, reasons)
 
 
@@ -374,6 +388,10 @@ def plan_global(
     path_clearance: float = PATH_CLEARANCE,
     hold_shape: bool = True,
     objective: str = "reach",
+    refine: str = "none",
+    max_speed: float | Sequence[float] | dict[str, float] | None = None,
+    max_accel: float | Sequence[float] | dict[str, float] | None = None,
+    trajectory_step: float | None = None,
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -423,6 +441,23 @@ def plan_global(
         The local steering's objective, ``"reach"`` or ``"length"``
         (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
         :func:`~nilpotent.planning.iterative.plan`).
+    refine:
+        ``"none"`` (default) or ``"ocp"``: the plan found is refined by direct optimal
+        control of the true system, minimising its length under the limits
+        (:func:`nilpotent.planning.ocp.refine_segments`; needs the ``ocp`` extra; the
+        obstacles are not constraints of that problem), and the refined controls are
+        kept only if they verify and are shorter (:attr:`GlobalPlan.refinement` says
+        what happened).
+    max_speed, max_accel:
+        Bounds on the inputs of the re-timed motion, ``|ũ_i| ≤ V_i`` and
+        ``|dũ_i/dt| ≤ A_i``: a number (every input), ``m`` numbers, or
+        ``{"u1": V, ...}`` (a speed bound may leave inputs out: unbounded; an
+        acceleration bound must name them all).  Given, the verified plan is
+        re-timed by TOPP-RA (:func:`~nilpotent.planning.timing.retime`) into
+        :attr:`GlobalPlan.timed`; ``max_speed`` needs ``max_accel``.
+    trajectory_step:
+        Largest time between the samples of the re-timed motion (default: its
+        duration / 500).
 
     Raises
     ------
@@ -434,16 +469,27 @@ def plan_global(
         The time limit ran out before a plan was found and verified (every
         step is bounded by it: :mod:`nilpotent.planning.budget`), or the plan
         would need more than :data:`MAX_PIECES` pieces.
+    MissingExtraError
+        ``refine="ocp"`` without CasADi.
     """
+    check_refine(refine)
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
+    bounds = input_bounds(sys.m, max_speed, max_accel, step=trajectory_step)
     with budget.time_budget(time_limit):
-        return _plan_global(
+        result = _plan_global(
             sys, start, goal, tol, world=world, limits=limits,
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
             max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
-            path_clearance=path_clearance, hold_shape=hold_shape, objective=objective)
+            path_clearance=path_clearance, hold_shape=hold_shape, objective=objective,
+            refine=refine)
+        if bounds is None:
+            return result
+        p = result.plan
+        timed = retime(sys, p.start, p.segments, bounds, step=trajectory_step,
+                       reached=p.reached, engine=engine)
+        return dataclasses.replace(result, timed=timed)
 
 
 def _plan_global(
@@ -466,6 +512,7 @@ def _plan_global(
     path_clearance: float,
     hold_shape: bool,
     objective: str,
+    refine: str,
 ) -> GlobalPlan:
     t0 = time.perf_counter()
     if not (tol > 0 and math.isfinite(tol)):
@@ -493,7 +540,12 @@ def _plan_global(
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
-        v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
+        refinement = refine_route(refine, checker, x0, xg, segments, tol, engine)
+        v = None
+        if refinement is not None and refinement[1].applied:
+            segments, v = refinement[0], refinement[1].verification  # verified as below
+        if v is None:
+            v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "
@@ -514,7 +566,7 @@ def _plan_global(
         return GlobalPlan(whole, world, checker.limits, singular_margin,  # type: ignore[arg-type]
                           tuple(tuple(float(c) for c in w) for w in waypoints), tuple(pieces),
                           v, route, planner_s, time_limit, time.perf_counter() - t0,
-                          checker.clearance)
+                          checker.clearance, None if refinement is None else refinement[1])
 
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS

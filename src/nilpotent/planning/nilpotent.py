@@ -1,4 +1,4 @@
-"""Exact steering of nilpotent systems in privileged coordinates (MATH.md §7).
+"""Exact steering of nilpotent systems in privileged coordinates (the mathematics page, §7).
 
 Input: a :class:`~nilpotent.planning.triangular.TriangularSystem` (the fields
 ``X̂_i`` of a nilpotent approximation as polynomials in privileged coordinates
