@@ -18,11 +18,22 @@ call), and the length / exact distance ratio.  Then whole plans
 (ratio to the exact distance) and the trident snake (ratio to the geodesic
 distance of its free (3,6) approximation at the start, ``lower_bound``).
 
+The ``car`` (x, y, θ, φ; step 3), obstacle-free, as ``nilpotent plan car`` runs it
+(:func:`~nilpotent.planning.global_planner.plan_global`, the model's steering limit
+``|φ| ≤ atan 0.6``, turning radius ≥ 1): the lateral shift ``y = 1`` and seeded goals
+(``x, y`` uniform in [−1.5, 1.5], ``θ`` in [−π/2, π/2], ``φ = 0``), both objectives,
+against the Reeds–Shepp optimum of radius 1 (OMPL's ``ReedsSheppStateSpace``): the
+rear-axle path length ``∫|v| dt`` (``v`` the drive input) and the sub-Riemannian
+length ``∫‖(v, φ̇)‖ dt``, the reversals of ``v`` (sign changes) against those of the
+Reeds–Shepp path (sign changes of its motion along the heading, sampled), CPU and
+wall seconds per plan.
+
 Last, ``--ocp N`` (default 5; 0 skips it): the refinement by direct optimal control of
 the true system (``refine="ocp"``, :mod:`nilpotent.planning.ocp`, CasADi + IPOPT) of
 N warm-start plans per model (see :func:`ocp_section`).
 
-Usage: ``PYTHONPATH=src python benchmarks/plan_quality.py [--goals 20] [--trident 5] [--ocp 5]``.
+Usage: ``PYTHONPATH=src python benchmarks/plan_quality.py [--goals 20] [--trident 5]
+[--car 8] [--only-car] [--ocp 5]``.
 """
 
 from __future__ import annotations
@@ -83,13 +94,86 @@ def summary(name: str, ratios: list[float], seconds: list[float]) -> str:
             f"{1e3 * statistics.median(seconds):.2f} |")
 
 
+def reeds_shepp(goal: np.ndarray, radius: float = 1.0) -> tuple[float, int]:
+    """Length and reversals of the Reeds–Shepp optimum from the origin (OMPL)."""
+    from ompl import base as ob
+
+    space = ob.ReedsSheppStateSpace(radius)
+    a, b, c = space.allocState(), space.allocState(), space.allocState()
+    a.setX(0.0), a.setY(0.0), a.setYaw(0.0)
+    b.setX(float(goal[0])), b.setY(float(goal[1])), b.setYaw(float(goal[2]))
+    pts = []
+    for t in np.linspace(0.0, 1.0, 2001):
+        space.interpolate(a, b, float(t), c)
+        pts.append((c.getX(), c.getY(), c.getYaw()))
+    q = np.array(pts)
+    d = np.diff(q[:, :2], axis=0)
+    along = d[:, 0] * np.cos(q[:-1, 2]) + d[:, 1] * np.sin(q[:-1, 2])
+    signs = np.sign(along[np.abs(along) > 1e-9])
+    return float(space.distance(a, b)), int(np.sum(signs[1:] != signs[:-1]))
+
+
+def drive_profile(segments) -> tuple[float, int]:
+    """``∫|v| dt`` (rear-axle path length) and sign changes of the drive input ``v``."""
+    path, values = 0.0, []
+    for seg in segments:
+        t = np.linspace(0.0, seg.duration, 2001)
+        v = seg.values(t)[0]
+        path += float(np.sum(np.abs(v[1:]) + np.abs(v[:-1])) * (t[1] - t[0]) / 2)
+        values.append(v)
+    v = np.concatenate(values) if values else np.zeros(1)
+    signs = np.sign(v[np.abs(v) > 1e-6 * max(1e-300, float(np.max(np.abs(v))))])
+    return path, int(np.sum(signs[1:] != signs[:-1]))
+
+
+def car_benchmark(count: int, seed: int) -> None:
+    from nilpotent.planning.global_planner import plan_global
+
+    rng = np.random.default_rng(seed)
+    goals = [np.array([0.0, 1.0, 0.0, 0.0])]
+    goals += [np.array([*rng.uniform(-1.5, 1.5, 2), rng.uniform(-math.pi / 2, math.pi / 2), 0.0])
+              for _ in range(count - 1)]
+    car = get_model("car")
+    print("\n## car, obstacle-free, against Reeds–Shepp (radius 1)")
+    print("| goal (x, y, θ) | objective | path ∫abs(v) | RS length | path/RS | SR length | "
+          "reversals | RS reversals | CPU s | wall s |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    ratios: dict[str, list[float]] = {"reach": [], "length": []}
+    for g in goals:
+        rs_len, rs_rev = reeds_shepp(g)
+        for objective in ("reach", "length"):
+            t_cpu, t_wall = time.process_time(), time.perf_counter()
+            try:
+                res = plan_global(car, (0.0,) * 4, tuple(g), objective=objective,
+                                  time_limit=120.0)
+            except Exception as exc:
+                print(f"| {g[0]:.2f}, {g[1]:.2f}, {g[2]:.2f} | {objective} | failed: "
+                      f"{type(exc).__name__} | {rs_len:.3f} | | | | {rs_rev} | | |")
+                continue
+            cpu, wall = time.process_time() - t_cpu, time.perf_counter() - t_wall
+            path, rev = drive_profile(res.plan.segments)
+            ratios[objective].append(path / rs_len)
+            print(f"| {g[0]:.2f}, {g[1]:.2f}, {g[2]:.2f} | {objective} | {path:.3f} | "
+                  f"{rs_len:.3f} | {path / rs_len:.2f} | {res.plan.length:.3f} | {rev} | "
+                  f"{rs_rev} | {cpu:.1f} | {wall:.1f} |", flush=True)
+    for objective, r in ratios.items():
+        if r:
+            print(f"\n{objective}: path/RS median {statistics.median(r):.2f}, max {max(r):.2f} "
+                  f"({len(r)} of {len(goals)} goals planned)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--goals", type=int, default=20)
     ap.add_argument("--trident", type=int, default=5)
+    ap.add_argument("--car", type=int, default=8)
+    ap.add_argument("--only-car", action="store_true")
     ap.add_argument("--seed", type=int, default=19)
     ap.add_argument("--ocp", type=int, default=5)
     args = ap.parse_args()
+    if args.only_car:
+        car_benchmark(args.car, args.seed)
+        return
     rng = np.random.default_rng(args.seed)
     goals = [rng.normal(size=3) * rng.uniform(0.1, 2.0) for _ in range(args.goals)]
     y = sp.symbols("y1 y2 y3")
@@ -142,6 +226,8 @@ def main() -> None:
                 secs.append(dt)
             print(f"| trident-snake | {objective} | {statistics.median(ratios):.4f} | "
                   f"{max(ratios):.4f} | {statistics.median(secs):.3f} |")
+    if args.car:
+        car_benchmark(args.car, args.seed)
     if args.ocp:
         ocp_section(goals[: args.ocp], dist[: args.ocp], args.ocp, args.seed)
 

@@ -79,7 +79,8 @@ ObjectiveOpt = Annotated[
     str,
     typer.Option("--objective", metavar="WHAT",
                  help="Local steering: reach (straight segment and loops, default) or length "
-                      "(shortest geodesics of the step-2 approximation)."),
+                      "(shortest normal geodesics of the nilpotent approximation: closed form "
+                      "for step 2, shooting above)."),
 ]
 
 RefineOpt = Annotated[

@@ -505,8 +505,8 @@ def plan(
     objective : str
         What the local steering optimises (:data:`nilpotent.planning.length.OBJECTIVES`):
         ``"reach"`` (default: straight segment and loops, or Newton) or
-        ``"length"`` (the shortest normal geodesic of each step-2 approximation;
-        step ≤ 2 only).
+        ``"length"`` (the shortest normal geodesic of each approximation: closed
+        form for step 2, shooting above, :mod:`nilpotent.planning.shooting`).
 
     Raises
     ------
