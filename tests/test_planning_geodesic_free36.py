@@ -1,4 +1,4 @@
-"""Shortest geodesics of the free (3,6) group (``planning.geodesic_forms``), against independent results.
+"""Shortest geodesics of the free (3,6) group (``planning.geodesic_forms``), checked independently.
 
 The free step-2 group with three inputs, ``v̇_ab = (h_a u_b − h_b u_a)/2``
 (``(a, b) = (1,2), (1,3), (2,3)``): with ``x = h(1)`` and the area vector
@@ -74,10 +74,10 @@ def goal_of(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.array([x[0], x[1], x[2], w[2], -w[1], w[0]])
 
 
-def check_reached(geo, goal, start=np.zeros(6)) -> None:
+def check_reached(geo, goal, start=None) -> None:
     # the exact flow of the plan segments (independent code) reaches the goal
     segs = geodesic_controls(ST, geo)
-    reached = endpoint(TRI, start, segs)
+    reached = endpoint(TRI, np.zeros(6) if start is None else start, segs)
     assert np.max(np.abs(reached - goal)) < 1e-10 * (1 + np.max(np.abs(goal)))
 
 
