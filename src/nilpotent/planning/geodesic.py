@@ -30,21 +30,31 @@ is ``‖u₀‖``.
 ``z = (u, U)`` solves the linear ODE ``ż = F z``, ``F = [[Ω, 0], [I, 0]]``, so
 ``M`` is a block of ``G = ∫₀¹ e^{tF} z₀z₀ᵀ e^{tFᵀ} dt``, which Van Loan's block
 exponential gives exactly: ``exp([[−F, z₀z₀ᵀ], [0, Fᵀ]]) = [[e^{−F}, e^{−F}G], [0, e^{Fᵀ}]]``.
-No time stepping.  The Jacobian in ``(u₀, λ)`` is exact too (complex step: the
-map is real-analytic and built without conjugation), all ``1 + m + n₂``
-exponentials in one batched :func:`scipy.linalg.expm` call.
+No time stepping.  For ``m ≤ 3`` the same ``U(1)`` and ``M`` come in closed form
+from Rodrigues' formula (:mod:`nilpotent.planning.geodesic_forms`: nine scalar
+functions of ``θ²``), much cheaper than the block exponential, which is kept
+for ``m ≥ 4``.  The Jacobian in ``(u₀, λ)`` is exact too (complex step: the map
+is real-analytic and built without conjugation), batched.
 
 **Boundary problem.**  Find ``(u₀, λ)`` with ``y(1) = goal``: Levenberg–Marquardt
 (minimum-norm steps) on the problem dilated to unit size (``δ_λ`` maps
-geodesics to geodesics, lengths scale by ``λ``), from several starts — the
-straight segment ``u₀ = B⁺Δh, λ = 0`` (exact when the goal's vertical part is
-what the straight line gives), and covectors along ``±`` the remaining vertical
-displacement with rotation angles ``‖Ω‖ ∈ {π, 1.9π}``.  The shortest
-converged extremal is kept.  For two inputs and one vertical coordinate
-(Heisenberg up to a linear change: the unicycle's and the Heisenberg system's
-approximations) the minimiser is known in closed form (a circular arc whose
-area with the chord gives the vertical displacement) and serves as the single
-start; the general multi-start runs only if it does not converge.
+geodesics to geodesics, lengths scale by ``λ``), from near-exact starts where a
+closed form exists:
+
+* two inputs and one vertical coordinate (Heisenberg up to a linear change:
+  the unicycle's and the Heisenberg system's approximations): the minimiser is
+  a circular arc whose area with the chord gives the vertical displacement;
+* three inputs and three vertical coordinates spanning the brackets (the free
+  (3,6) group up to a linear change: the trident snake's approximation): the
+  rotations reduce the six equations to two in the axis angle and the rotation
+  angle, whose solutions are all sought (a scan, the helix limit, Newton) and
+  the three shortest polished
+  (:func:`~nilpotent.planning.geodesic_forms.free3_starts`).
+
+Otherwise, or if those do not converge, a multi-start: the straight segment
+``u₀ = B⁺Δh, λ = 0`` (exact when the goal's vertical part is what the straight
+line gives), and covectors along ``±`` the remaining vertical displacement with
+rotation angles ``‖Ω‖ ∈ {π, 1.9π}``.  The shortest converged extremal is kept.
 
 Its controls ``e^{tΩ}u₀`` are harmonic: for
 ``m ≤ 3`` the skew ``Ω`` has one frequency ``θ`` and, by Rodrigues' formula,
@@ -56,7 +66,8 @@ refused.)
 What is *not* claimed: that a normal extremal found is the global minimiser in
 every step-2 group (strictly abnormal minimisers exist in some step-2 Carnot
 groups, Golé–Karidi 1995).  For the Heisenberg group the result is checked
-against the closed-form distance (tests).
+against the closed-form distance, for the free (3,6) group against closed forms
+(goals with ``x ⊥ w``, vertical goals) and a brute multi-start (tests).
 """
 
 from __future__ import annotations

@@ -169,13 +169,16 @@ _THETA_MAX = 4 * math.pi
 def _q_kappa(theta: np.ndarray) -> tuple[np.ndarray, ...]:
     """``q, κ, q', κ'`` at ``θ`` (series below 0.05: ``θ/12 + θ³/360``, ``θ/6 + θ³/360``)."""
     small = theta < 0.05
-    t = np.where(small, 1.0, theta)
+    any_small = bool(np.any(small))
+    t = np.where(small, 1.0, theta) if any_small else theta
     sn, half = np.sin(t), np.sin(t / 2)
     one_c = 2 * half * half  # 1 − cos θ without cancellation near 2πℤ
     q = (t - sn) / (4 * one_c)
     dq = (one_c * one_c - (t - sn) * sn) / (4 * one_c * one_c)
     kappa = 2 / t - np.cos(t / 2) / half
     dkappa = -2 / t**2 + 1 / one_c
+    if not any_small:
+        return q, kappa, dq, dkappa
     th2 = theta * theta
     return (
         np.where(small, theta / 12 + theta * th2 / 360, q),
@@ -186,7 +189,7 @@ def _q_kappa(theta: np.ndarray) -> tuple[np.ndarray, ...]:
 
 
 def _tables() -> tuple[np.ndarray, ...]:
-    """``φ`` scan points, and ``(κ, θ)`` tables of the two branches ``(0, 2π)``, ``(2π, 4π)``.
+    """``φ`` scan points, and ``(κ, θ, q)`` tables of the branches ``(0, 2π)``, ``(2π, 4π)``.
 
     ``κ`` increases on each branch (``κ' = 1/(2 sin²(θ/2)) − 2/θ² > 0``): from 0 to ∞
     on the first, from −∞ to ∞ on the second, so ``θ = κ⁻¹(·)`` is an interpolation.
@@ -202,11 +205,13 @@ def _tables() -> tuple[np.ndarray, ...]:
     tables = []
     for lo in (0.0, 2 * math.pi):
         theta = lo + 2 * math.pi * unit
-        tables += [_q_kappa(theta)[1], theta]
-    return (phi, *tables)
+        q, kappa, _, _ = _q_kappa(theta)
+        tables.append((kappa, theta, q))
+    return phi, np.sin(phi), np.cos(phi), tuple(tables)
 
 
-_SCAN_PHI, _KAPPA1, _THETA1, _KAPPA2, _THETA2 = _tables()
+#: The φ scan (with its sines and cosines) and per branch the tables ``(κ, θ, q)``.
+_SCAN_PHI, _SCAN_SIN, _SCAN_COS, _BRANCHES = _tables()
 #: Offsets ``θ − 2πk`` of the seeds along the helix limit.
 _HELIX_DELTAS = np.concatenate([10.0 ** (-np.arange(1, 31) / 3),
                                 -(10.0 ** (-np.arange(1, 31) / 3))])
@@ -246,20 +251,19 @@ def reduced_free3_solutions(target: np.ndarray, newton_steps: int = 12) -> np.nd
     # seeds: for a given φ the two equations are linear in (q, κ) —
     # q = (w₁ cos φ + w₂ sin φ)/sin²φ, κ = 2(w₂ cos φ − w₁ sin φ)/(sin φ cos φ) — so the
     # solutions are where q(κ⁻¹(κ(φ))) = q(φ) on a branch: sign changes on the φ scan
-    sn, cs = np.sin(_SCAN_PHI), np.cos(_SCAN_PHI)
+    sn, cs = _SCAN_SIN, _SCAN_COS
     q_goal = (w1 * cs + w2 * sn) / (sn * sn)
     k_goal = 2 * (w2 * cs - w1 * sn) / (sn * cs)
     seeds_p, seeds_t = [], []
-    for kappa_table, theta_table in ((_KAPPA1, _THETA1), (_KAPPA2, _THETA2)):
+    for kappa_table, theta_table, q_table in _BRANCHES:
         inside = (k_goal > kappa_table[0]) & (k_goal < kappa_table[-1])
-        theta = np.interp(k_goal, kappa_table, theta_table)
-        gap = np.where(inside, _q_kappa(theta)[0] - q_goal, np.nan)
+        gap = np.where(inside, np.interp(k_goal, kappa_table, q_table) - q_goal, np.nan)
         flip = np.flatnonzero(gap[:-1] * gap[1:] <= 0)
         seeds_p.append((_SCAN_PHI[flip] + _SCAN_PHI[flip + 1]) / 2)
-        seeds_t.append((theta[flip] + theta[flip + 1]) / 2)
+        seeds_t.append(np.interp((k_goal[flip] + k_goal[flip + 1]) / 2, kappa_table, theta_table))
     # φ = ±π/2 (e ⊥ x) is where that elimination divides by 0: w₁ = 0 and the planar
     # (Heisenberg) arc q(θ) = |w₂|, seeded on the first branch
-    heis = float(np.interp(abs(w2), _q_kappa(_THETA1)[0], _THETA1))
+    heis = float(np.interp(abs(w2), _BRANCHES[0][2], _BRANCHES[0][1]))
     seeds_p.append(np.array([math.copysign(math.pi / 2, w2 if w2 else 1.0)]))
     seeds_t.append(np.array([heis]))
     # θ → 2πk, φ → 0 (or π) with φ/(θ − 2πk) = ρ: the straight motion along x plus k full
