@@ -11,7 +11,11 @@ used here, derived independently of the code:
   distance is Heisenberg's (Dido's problem) with chord ``|x|`` and area ``|w|``;
 * ``x = 0``: the isoperimetric inequality for the projection on the plane
   ⊥ ``w`` gives ``L ≥ √(4π|w|)``, reached by a circle;
-* dilations ``(x, w) ↦ (λx, λ²w)`` scale lengths by ``λ``.
+* dilations ``(x, w) ↦ (λx, λ²w)`` scale lengths by ``λ``;
+* any goal: ``|d − √(4π|w|)| ≤ |x|`` — the segment to ``x`` followed by a circle
+  of area ``|w|`` reaches it (a straight segment from 0 makes no area, a closed
+  loop adds its own), and a curve closed by its chord (no area either) is a
+  loop of area vector ``w``, so ``(d + |x|)² ≥ 4π|w|`` (isoperimetric).
 
 Elsewhere the oracle is a brute multi-start: Levenberg–Marquardt (written here)
 on normal extremals ``u = e^{tΩ}u₀`` (Pontryagin; ``Ω`` any skew matrix), the
@@ -170,12 +174,30 @@ def test_rotation_equivariance_and_dilation() -> None:
         geo = shortest_geodesic(ST, np.zeros(6), goal_of(x, w))
         check_reached(geo, goal_of(x, w))
         assert geo.length >= np.linalg.norm(x) * (1 - 1e-12)
+        circle = math.sqrt(4 * math.pi * np.linalg.norm(w))
+        assert abs(geo.length - circle) <= np.linalg.norm(x) * (1 + 1e-12)
         rot = Rotation.random(random_state=rng).as_matrix()
         turned = shortest_geodesic(ST, np.zeros(6), goal_of(rot @ x, rot @ w))
         assert turned.length == pytest.approx(geo.length, rel=1e-9)
         lam = rng.uniform(0.1, 10)
         grown = shortest_geodesic(ST, np.zeros(6), goal_of(lam * x, lam**2 * w))
         assert grown.length == pytest.approx(lam * geo.length, rel=1e-9)
+
+
+def test_nearly_vertical_goals_approach_the_circle() -> None:
+    # |x|² ≪ |w| (θ within ~|x| of 2π, where the equations are ill-conditioned): the
+    # length is within |x| of √(4π|w|); a goal 1e-200 away keeps its length (no underflow)
+    rng = np.random.default_rng(12)
+    for k in range(0, 16, 2):
+        x, w = rng.normal(size=3) * 10.0 ** (-k / 1.5), rng.normal(size=3)
+        geo = shortest_geodesic(ST, np.zeros(6), goal_of(x, w))
+        check_reached(geo, goal_of(x, w))
+        circle = math.sqrt(4 * math.pi * np.linalg.norm(w))
+        assert abs(geo.length - circle) <= np.linalg.norm(x) * (1 + 1e-9) + 1e-12 * circle
+    x = np.array([3e-200, -1e-200, 2e-200])
+    geo = shortest_geodesic(ST, np.zeros(6), goal_of(x, np.zeros(3)))
+    assert geo.length == pytest.approx(float(np.sqrt(np.sum((x * 1e200) ** 2))) * 1e-200,
+                                       rel=1e-12, abs=0)
 
 
 def test_goals_with_w_parallel_to_x_are_reached() -> None:

@@ -554,7 +554,7 @@ def shortest_geodesic(
     return Geodesic(
         tuple(float(v) for v in u0),
         tuple(float(v) for v in lam),
-        float(np.linalg.norm(u0)),
+        float(np.linalg.norm(params[: st.m])) * scale,  # (‖u₀‖ itself underflows below 1e-154)
         tuple(float(v) for v in reached),
         err,
         converged,

@@ -266,6 +266,11 @@ def reduced_free3_solutions(target: np.ndarray, newton_steps: int = 12) -> np.nd
     heis = float(np.interp(abs(w2), _BRANCHES[0][2], _BRANCHES[0][1]))
     seeds_p.append(np.array([math.copysign(math.pi / 2, w2 if w2 else 1.0)]))
     seeds_t.append(np.array([heis]))
+    # |w| ≫ |x|²: the axis near w and a near-full circle of area ≈ |w| (q = |w|/sin²φ)
+    along = math.atan2(w2, w1)
+    big = math.hypot(w1, w2) / max(math.sin(along) ** 2, 1e-300)
+    seeds_p.append(np.array([along]))
+    seeds_t.append(np.array([float(np.interp(big, _BRANCHES[0][2], _BRANCHES[0][1]))]))
     # θ → 2πk, φ → 0 (or π) with φ/(θ − 2πk) = ρ: the straight motion along x plus k full
     # circles (the helices), reached on the parabola w₂² = |w₁|/(kπ), w₁ = kπρ², w₂ = −ρ,
     # where the elimination above is singular: seeds along that limit
@@ -367,7 +372,8 @@ def free3_starts(
     ``count`` shortest solutions are mapped back:
     ``Ω = θ[e]_×``, ``λ`` from ``Σ_k λ_k skew_k = Ω``, ``u₀ = Φ(Ω)⁻¹x`` with
     ``Φ = ∫₀¹e^{sΩ}ds``.  ``x = 0`` (a full circle in the plane ⊥ w, length
-    ``√(4π|w|)``) and ``w = 0`` (the straight segment) are handled directly.
+    ``√(4π|w|)``) and ``w = 0`` (the straight segment) are handled directly;
+    for ``|x|² ≤ 10⁻¹²|w|`` that circle is a start too.
 
     Parameters
     ----------
@@ -395,11 +401,17 @@ def free3_starts(
     nx, nw = float(np.linalg.norm(x)), float(np.linalg.norm(w))
     if nw <= 1e-15 * nx * nx:
         return np.concatenate([x, np.zeros(3)])[None, :]
-    if nx * nx <= 1e-14 * nw:
+    circle = None
+    if nx * nx <= 1e-12 * nw:  # (near) x = 0: the circle of area |w| in the plane ⊥ w
         axis = w / nw
-        side = np.cross(axis, np.eye(3)[int(np.argmin(np.abs(axis)))])
+        # the arc of angle θ → 2π starts against its chord (rotated by −θ/2): u₀ ∥ −x_⊥
+        side = axis * (x @ axis) - x
+        if not np.linalg.norm(side) > 1e-300:
+            side = np.cross(axis, np.eye(3)[int(np.argmin(np.abs(axis)))])
         u0 = math.sqrt(4 * math.pi * nw) * side / np.linalg.norm(side)
-        return np.concatenate([u0, covector_inv @ (2 * math.pi * axis)])[None, :]
+        circle = np.concatenate([u0, covector_inv @ (2 * math.pi * axis)])[None, :]
+        if nx == 0.0:
+            return circle
     p1 = x / nx
     w_perp = w - (w @ p1) * p1
     if np.linalg.norm(w_perp) > 1e-12 * nw:
@@ -409,7 +421,7 @@ def free3_starts(
         p2 /= np.linalg.norm(p2)
     sols = reduced_free3_solutions(np.array([w @ p1, w @ p2]) / (nx * nx))
     if sols.size == 0:
-        return None
+        return circle
     keep = [0]
     for r in range(1, len(sols)):
         if len(keep) < count and abs(sols[r, 2] - sols[keep[-1], 2]) > 1e-9 * sols[r, 2]:
@@ -420,4 +432,7 @@ def free3_starts(
     _, g = coefficients(theta * theta)
     flow = np.eye(3) + g[:, 1, None, None] * omega + g[:, 2, None, None] * (omega @ omega)
     u0 = np.linalg.solve(flow, np.broadcast_to(x, (len(keep), 3))[:, :, None])[:, :, 0]
-    return np.concatenate([u0, (theta[:, None] * axes) @ covector_inv.T], axis=1)
+    starts = np.concatenate([u0, (theta[:, None] * axes) @ covector_inv.T], axis=1)
+    # for |x|² ≪ |w| the reduced equations are ill-conditioned (θ within ~|x| of 2π):
+    # the circle is offered as well, Levenberg–Marquardt takes it to the goal
+    return starts if circle is None else np.concatenate([circle, starts])
