@@ -188,7 +188,9 @@ def _q_kappa(theta: np.ndarray) -> tuple[np.ndarray, ...]:
     )
 
 
-def _tables() -> tuple[np.ndarray, ...]:
+def _tables() -> tuple[
+    np.ndarray, np.ndarray, np.ndarray, tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...]
+]:
     """``φ`` scan points, and ``(κ, θ, q)`` tables of the branches ``(0, 2π)``, ``(2π, 4π)``.
 
     ``κ`` increases on each branch (``κ' = 1/(2 sin²(θ/2)) − 2/θ² > 0``): from 0 to ∞
@@ -202,7 +204,7 @@ def _tables() -> tuple[np.ndarray, ...]:
         -math.pi / 2 - near[:12],
     ]))
     unit = np.unique(np.concatenate([np.linspace(0, 1, 201)[1:-1], near, 1 - near]))
-    tables = []
+    tables: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     for lo in (0.0, 2 * math.pi):
         theta = lo + 2 * math.pi * unit
         q, kappa, _, _ = _q_kappa(theta)
