@@ -24,6 +24,12 @@ by their trigonometric closed forms above, which involve only ``s`` through
 complex-step derivatives of :class:`~nilpotent.planning.geodesic.Step2Structure`
 stay exact.  This replaces a ``4m × 4m`` block matrix exponential (Van Loan)
 per evaluation by a few elementwise operations (issue 19, speed).
+
+For systems equivalent to the free (3,6) group the boundary problem itself is
+reduced by the rotations to two scalar equations (:func:`free3_starts`,
+:func:`reduced_free3_solutions`; derivation in the comment above them), whose
+solutions give near-exact starts for the Levenberg–Marquardt polish of
+:func:`~nilpotent.planning.geodesic.shortest_geodesic`.
 """
 
 from __future__ import annotations
@@ -240,13 +246,15 @@ def reduced_free3_solutions(target: np.ndarray, newton_steps: int = 12) -> np.nd
     target : numpy.ndarray
         ``w/|x|²`` in the basis ``(p₁, p₂)``, shape ``(2,)``.
     newton_steps : int
-        Damped Newton steps from every local minimum of the residual on the grid.
+        Most damped Newton steps from every seed (the sign changes on the φ
+        scan, the planar-arc, circle and helix limits).
 
     Returns
     -------
     numpy.ndarray
         Shape ``(K, 3)``: rows ``(φ, θ, length/|x|)`` of the solutions reached
-        (residual ``≤ 1e-7·(1 + |target|)``: starts to be polished), sorted by
+        (residual ``≤ 1e-10·(1 + |target|)``, or ``1e-7`` for seeds still
+        converging after the last step: starts to be polished), sorted by
         length; possibly empty.
     """
     w1, w2 = float(target[0]), float(target[1])
@@ -314,7 +322,7 @@ def reduced_free3_solutions(target: np.ndarray, newton_steps: int = 12) -> np.nd
             factor = np.where(np.isfinite(factor), factor, 0.0)
             p = p + np.where(factor > 0, factor * dp, 0.0)
             t = t + np.where(factor > 0, factor * dt, 0.0)
-        # the last iterates not yet at 1e-12 but close enough to be polished
+        # the last iterates not yet at 1e-10 but close enough to be polished
         near = previous <= 1e-7 * scale if p.size == previous.size else np.zeros(p.size, bool)
         p = np.concatenate([*done_p, p[near]])
         t = np.concatenate([*done_t, t[near]])
