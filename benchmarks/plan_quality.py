@@ -28,6 +28,15 @@ length ``∫‖(v, φ̇)‖ dt``, the reversals of ``v`` (sign changes) against 
 Reeds–Shepp path (sign changes of its motion along the heading, sampled), CPU and
 wall seconds per plan.
 
+The step-2 boundary problem itself (:func:`~nilpotent.planning.geodesic.shortest_geodesic`,
+warm calls, CPU and wall milliseconds) is timed against the named baseline
+``previous multi-start LM`` (:func:`previous_multistart_length`: the solver before
+the closed forms, the Van Loan block exponential and five starts), run in the same
+process: Heisenberg (ratio to the exact distance), the trident snake's free (3,6)
+approximation at the start (ratio to the baseline's length, and how often the
+baseline found nothing), and (3,6) goals with ``x ⊥ w`` in random orientations,
+whose distance is Dido's (the projection on the plane ⊥ ``w`` is no longer).
+
 Last, ``--ocp N`` (default 5; 0 skips it): the refinement by direct optimal control of
 the true system (``refine="ocp"``, :mod:`nilpotent.planning.ocp`, CasADi + IPOPT) of
 N warm-start plans per model (see :func:`ocp_section`).
@@ -50,7 +59,16 @@ from scipy.optimize import brentq, minimize
 
 from nilpotent.models import get_model
 from nilpotent.planning import TriangularSystem, plan, steer_nilpotent
-from nilpotent.planning.geodesic import control_length
+from nilpotent.planning.geodesic import (
+    Step2Structure,
+    _first_guess,
+    _lm,
+    _starts,
+    _van_loan_integrals,
+    control_length,
+    shortest_geodesic,
+)
+from nilpotent.planning.local_model import numeric_model
 
 
 def heisenberg_distance(x1: float, x2: float, x3: float) -> float:
@@ -161,6 +179,90 @@ def car_benchmark(count: int, seed: int) -> None:
             print(f"\n{objective}: path/RS median {statistics.median(r):.2f}, max {max(r):.2f} "
                   f"({len(r)} of {len(goals)} goals planned)")
 
+class _VanLoanStructure(Step2Structure):
+    """The structure with the endpoint integrals of the previous solver (block exponential)."""
+
+    def endpoints(self, y0: np.ndarray, u0: np.ndarray, lam: np.ndarray) -> np.ndarray:
+        omega = np.einsum("bk,kij->bij", lam, self.skew)
+        u_int, mm = _van_loan_integrals(omega, u0)
+        h, v = list(self.h_index), list(self.v_index)
+        out = np.tile(y0.astype(u0.dtype), (u0.shape[0], 1))
+        out[:, h] += u_int @ self.b.T
+        out[:, v] += np.einsum("kil,l,bi->bk", self.a, y0[h], u_int)
+        out[:, v] += np.einsum("kij,bij->bk", self.t, mm)
+        return out
+
+
+def previous_multistart_length(st: Step2Structure, goal: np.ndarray) -> float:
+    """Baseline: the previous solver from 0 (Van Loan integrals; Heisenberg-type systems from
+    the closed-form arc, others from the five general starts); ``inf`` if none converged."""
+    old = _VanLoanStructure(st.h_index, st.v_index, st.b, st.a, st.t, st.skew)
+    weights = np.ones(goal.size)
+    weights[list(st.v_index)] = 2.0
+    scale = float(np.max(np.abs(goal) ** (1 / weights)))
+    ug, zero = goal / scale**weights, np.zeros(goal.size)
+    first = _first_guess(old, zero, ug) if st.m == 2 else None
+    finals, errs = _lm(old, zero, ug, first) if first is not None else ([], [])
+    if not any(e <= 1e-12 for e in errs):
+        finals, errs = _lm(old, zero, ug, np.array(_starts(old, zero, ug)))
+    lengths = [np.linalg.norm(p[: st.m]) for p, e in zip(finals, errs, strict=True) if e <= 1e-12]
+    return scale * float(min(lengths)) if lengths else math.inf
+
+
+def _clock(fn, *args):
+    cpu, wall = time.process_time(), time.perf_counter()
+    out = fn(*args)
+    return out, time.process_time() - cpu, time.perf_counter() - wall
+
+
+def step2_geodesic_speed(rng: np.random.Generator, count: int) -> None:
+    """Rows: warm ``shortest_geodesic`` against the previous multi-start LM, same goals."""
+    y = sp.symbols("y1 y2 y3")
+    heis = Step2Structure.from_triangular(
+        TriangularSystem.from_fields(((1, 0, -y[1] / 2), (0, 1, y[0] / 2)), y, (1, 1, 2)))
+    tri = Step2Structure.from_triangular(
+        numeric_model(get_model("trident-snake"), np.zeros(6)).nilpotent)
+    z = sp.symbols("z1:7")  # the free (3,6) group: v̇_ab = (h_a u_b − h_b u_a)/2
+    free_st = Step2Structure.from_triangular(TriangularSystem.from_fields(
+        [[1, 0, 0, -z[1] / 2, -z[2] / 2, 0], [0, 1, 0, z[0] / 2, 0, -z[2] / 2],
+         [0, 0, 1, 0, z[0] / 2, z[1] / 2]], z, (1, 1, 1, 2, 2, 2)))
+    cases = []
+    hg = [rng.normal(size=3) * rng.uniform(0.1, 2.0) for _ in range(count)]
+    cases.append(("heisenberg", heis, hg, [heisenberg_distance(*g) for g in hg]))
+    model = numeric_model(get_model("trident-snake"), np.zeros(6))
+    cases.append(("trident-snake (3,6), box 0.15", tri,
+                  [model.forward(rng.uniform(-0.15, 0.15, size=6)) for _ in range(count)], None))
+    perp = []
+    for _ in range(count):  # x ⊥ w: rotate (r, 0, 0), (0, 0, a); v = (w₃, −w₂, w₁)
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        r, a = rng.uniform(0.05, 2.0), rng.uniform(-2.0, 2.0)
+        x, w = q @ np.array([r, 0, 0]), q @ np.array([0, 0, a])
+        perp.append((np.array([*x, w[2], -w[1], w[0]]), heisenberg_distance(r, 0, a)))
+    cases.append(("free (3,6), x ⊥ w", free_st, [g for g, _ in perp], [d for _, d in perp]))
+    print("\n## step-2 boundary problem (warm `shortest_geodesic` calls)")
+    print("| system | solver | median length/ref | max length/ref | failed | "
+          "median CPU ms | max CPU ms | median wall ms |")
+    print("|---|---|---|---|---|---|---|---|")
+    for name, st, goals, exact in cases:
+        zero = np.zeros(goals[0].size)
+        shortest_geodesic(st, zero, goals[0])
+        previous_multistart_length(st, goals[0])  # warm-up
+        new = [_clock(lambda g, st=st, zero=zero: shortest_geodesic(st, zero, g).length, g)
+               for g in goals]
+        old = [_clock(previous_multistart_length, st, g) for g in goals]
+        refs = exact if exact is not None else [o[0] for o in old]
+        ref_name = "exact" if exact is not None else "previous"
+        for solver, rows in (("shortest_geodesic", new), ("previous multi-start LM", old)):
+            ok = [(r[0] / d, r[1], r[2]) for r, d in zip(rows, refs, strict=True)
+                  if math.isfinite(r[0]) and math.isfinite(d)]
+            failed = sum(not math.isfinite(r[0]) for r in rows)
+            ratios = [o[0] for o in ok]
+            print(f"| {name} | {solver} | {statistics.median(ratios):.6f} ({ref_name}) | "
+                  f"{max(ratios):.6f} | {failed}/{len(rows)} | "
+                  f"{1e3 * statistics.median(r[1] for r in rows):.2f} | "
+                  f"{1e3 * max(r[1] for r in rows):.2f} | "
+                  f"{1e3 * statistics.median(r[2] for r in rows):.2f} |")
+
 
 def main() -> None:
     ap = argparse.ArgumentParser()
@@ -199,6 +301,7 @@ def main() -> None:
         ratios.append(length / d)
         secs.append(dt)
     print(summary("baseline: SLSQP direct shooting (16 pieces)", ratios, secs))
+    step2_geodesic_speed(np.random.default_rng(args.seed + 1), max(args.goals, 20))
 
     print("\n## whole plans (true model, re-simulated)")
     print("| model | objective | median length/bound | max length/bound | median s/plan |")
