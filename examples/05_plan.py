@@ -27,7 +27,7 @@ goal = (0.0, 0.05, 0.05, 0.0, 0.0, 0.0)
 q = steer(snake, (0,) * 6, goal, tol=1e-6)
 print(f"trident snake: error {q.error:.1e}, converged {q.converged}")
 
-# The plan as data: the `nilpotent/plan@1` object of INTERFACE.md (segments of sinusoids).
+# The plan as data: the `nilpotent/plan@1` object of docs/interface.md (segments of sinusoids).
 # `to_json()` is strict JSON: a number that is not finite is null and listed under
 # "undefined", so `allow_nan=False` (the JSON standard) always holds.
 path = out / "plan.json"

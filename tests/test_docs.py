@@ -25,8 +25,7 @@ _LINK = re.compile(r"\[[^\]\n]*\]\((?P<target>[^)\s]+)\)")
 
 
 def _doc_sources() -> list[Path]:
-    """The pages of the site and the README (``docs/hooks`` is code that rewrites the
-    docstrings' mentions of the design notes, so it names them on purpose)."""
+    """The pages of the site and the README."""
     pages = [p for p in (ROOT / "docs").rglob("*") if p.suffix in (".md", ".ipynb")]
     return [*sorted(pages), ROOT / "README.md"]
 
@@ -46,8 +45,8 @@ def _prose(path: Path) -> str:
     return _CODE_OR_MATH.sub(" ", text)
 
 
-def _generated_pages() -> set[str]:
-    """The pages ``docs/hooks/generated_pages.py`` adds when the site is built."""
+def _hook():
+    """The site's hook, ``docs/hooks/generated_pages.py``, as a module."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location(
@@ -56,6 +55,12 @@ def _generated_pages() -> set[str]:
     assert spec and spec.loader
     hook = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(hook)
+    return hook
+
+
+def _generated_pages() -> set[str]:
+    """The pages ``docs/hooks/generated_pages.py`` adds when the site is built."""
+    hook = _hook()
     api = {f"api/{key}.md" for key, *_ in hook.API_TOPICS} | {"api/index.md"}
     return {"cli.md", "tutorial-notebook.md", *api}
 
@@ -69,6 +74,40 @@ def test_docs_and_readme_name_nothing_outside_the_repository():
         if needle in line
     ]
     assert found == []
+
+
+def test_the_code_names_no_design_note_outside_the_repository():
+    """The docstrings (shown by ``help()`` and on the API pages), the messages and the
+    examples name the site's pages, never the project's design notes."""
+    sources = [*(ROOT / "src").rglob("*.py"), *(ROOT / "examples").rglob("*.py")]
+    found = [
+        f"{path.relative_to(ROOT)}:{n}: {needle}"
+        for path in sorted(sources)
+        for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        for needle in _OUTSIDE
+        if needle in line
+    ]
+    assert found == []
+
+
+def test_the_docstrings_mentions_of_sections_exist():
+    """``the mathematics page, §N`` and ``the interface page, "Heading"`` in the code name
+    a section that exists (the site's hook links them, and fails the build otherwise)."""
+    hook = _hook()
+    math, interface, _ = hook._headings()
+    assert set(math) == {str(k) for k in range(1, len(math) + 1)} and len(math) >= 8
+    found, missing = 0, []
+    for path in sorted((ROOT / "src").rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        for m in hook._PAGE_REF.finditer(text):
+            found += 1
+            if m.group("section") and m.group("section") not in math:
+                missing.append(f"{path.relative_to(ROOT)}: {m.group(0)}")
+            heading = m.group("heading")
+            if heading and " ".join(heading.split()) not in interface:
+                missing.append(f"{path.relative_to(ROOT)}: {m.group(0)}")
+    assert missing == []
+    assert found > 20
 
 
 def test_every_relative_link_of_the_docs_and_readme_resolves():
@@ -113,6 +152,57 @@ def test_mentions_of_other_pages_are_links_not_file_names():
         if not m.group(0).startswith("`benchmarks/")
     ]
     assert found == []
+
+
+_CODE = re.compile(r"^(?P<f>```|~~~).*?^(?P=f)|`[^`\n]*`", re.DOTALL | re.MULTILINE)
+_FORMULA = re.compile(r"\$\$(?P<display>.+?)\$\$|\$(?P<inline>[^$\n]+)\$", re.DOTALL)
+
+
+def _formulas(path: Path) -> list[str]:
+    """The ``$...$`` and ``$$...$$`` formulas of a page (of a notebook, of its markdown),
+    outside code."""
+    text = path.read_text(encoding="utf-8")
+    if path.suffix == ".ipynb":
+        cells = json.loads(text)["cells"]
+        text = "\n\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "markdown")
+    text = _CODE.sub(" ", text)
+    return [m.group("display") or m.group("inline") for m in _FORMULA.finditer(text)]
+
+
+def _mathml_problems(latex: str) -> list[str]:
+    """What ``latex2mathml`` (the site's typesetter) silently gets wrong: a command it
+    does not know left as text, ``&`` outside an ``array``/matrix (``aligned``) as a
+    letter, a fence with a subscript (``\\end{pmatrix}_{i}``)."""
+    from nilpotent.typeset import mathml
+
+    try:
+        out = mathml(latex, display=True)
+    except Exception as exc:  # the site would show the source
+        return [f"{type(exc).__name__}: {exc}"]
+    text = re.sub(r"<annotation.*?</annotation>", "", out, flags=re.DOTALL)
+    problems = [f"raw {t!r}" for t in re.findall(r">([^<]*\\[A-Za-z]+[^<]*)<", text)]
+    if re.search(r"<mi>&(?:amp;)?</mi>", text):
+        problems.append("'&' as a letter")
+    if re.search(r"<msub><mo>[^<]*</mo><mtable>", text):
+        problems.append("a subscript on a fence")
+    return problems
+
+
+def test_every_formula_of_the_docs_typesets():
+    found, bad = 0, []
+    for path in _doc_sources():
+        for latex in _formulas(path):
+            found += 1
+            where = f"{path.relative_to(ROOT)}: ${latex[:60]}$"
+            bad += [f"{where}: {p}" for p in _mathml_problems(latex)]
+    assert bad == []
+    assert found > 500  # derivations are typeset, not code
+
+
+def test_the_formula_check_sees_what_the_typesetter_gets_wrong():
+    assert _mathml_problems(r"[X, Y] = DY\cdot X - DX\cdot Y") == []
+    assert _mathml_problems(r"\begin{aligned} a &= b \end{aligned}") != []
+    assert _mathml_problems(r"\det\begin{pmatrix} a & b \end{pmatrix}_{i}") != []
 
 
 def test_tutorial_notebook_is_stored_without_outputs():

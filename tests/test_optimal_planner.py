@@ -21,7 +21,8 @@ from nilpotent.cli import app
 from nilpotent.errors import OptionError
 from nilpotent.models import get_model
 from nilpotent.planning.global_planner import plan_global
-from nilpotent.planning.optimal_planner import ball_box_metric, reversals
+from nilpotent.planning.optimal_planner import ball_box_metric
+from nilpotent.planning.timing import input_reversals
 from replay import resimulate
 
 LIMITS = {"theta": (-1.0, 1.0), "y": (-1.0, 1.0)}
@@ -82,9 +83,8 @@ def test_reversals_of_hand_made_controls():
     from nilpotent.planning.controls import constant_segment
 
     fwd, back = constant_segment((1.0, 0.0)), constant_segment((-2.0, 0.5))
-    assert reversals([fwd, back, fwd]) == 2
-    assert reversals([fwd, constant_segment((0.0, 1.0)), fwd]) == 0  # a stop is no reversal
-    assert reversals([]) == 0
+    assert input_reversals([fwd, back, fwd])[0] == 2
+    assert input_reversals([fwd, constant_segment((0.0, 1.0)), fwd])[0] == 0  # a stop
 
 
 def test_ball_box_cost_by_hand():

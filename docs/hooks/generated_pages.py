@@ -9,8 +9,9 @@
   is, code as Python blocks) with the outputs of a fresh run (figures as PNG,
   results as their typeset HTML) and a link to the notebook itself;
 
-the mathematics of every page typeset as MathML and the docstrings' Sphinx-style
-cross-references made links (:func:`on_page_content`); the README's links, on the
+the mathematics of every page typeset as MathML, the docstrings' Sphinx-style
+cross-references and their mentions of the site's pages made links
+(:func:`on_page_content`); the README's links, on the
 home page, made relative to the site (:func:`on_page_markdown`).
 """
 
@@ -155,6 +156,9 @@ API_SUPPORTING: dict[str, tuple[str, ...]] = {
         "nilpotent.planning.iterative.PlanFigure",
         "nilpotent.viz.plan_world.plot_plan_world",
         "nilpotent.viz.plan_world.animate_plan_world",
+        "nilpotent.planning.timing.TimedTrajectory",
+        "nilpotent.planning.timing.InputBounds",
+        "nilpotent.planning.timing.retime",
     ),
 }
 
@@ -340,21 +344,39 @@ _XREF = re.compile(
     r"<code>(?P<tilde>~)?(?P<path>[A-Za-z_]\w*(?:\.[A-Za-z_]\w*)*)(?P<call>\(\))?</code>"
 )
 
-#: A mention of the project's design notes in a docstring: the site has the pages.
-_NOTE = re.compile(
-    r"(?:<code>)?(?P<note>MATH|INTERFACE)\.md(?:</code>)?"
-    r"(?:\s*(?:§|&sect;)\s*(?P<section>\d+)(?:[–-]\d+)?(?:\.\d+)?)?"
+#: A docstring's mention of a page of the site (:func:`page_references`).
+_PAGE_REF = re.compile(
+    r"[Tt]he\s+(?P<page>mathematics|interface|Model\s+files|World\s+files)\s+page"
+    r"(?:\s+of\s+the\s+documentation)?"
+    r'(?:,\s*(?:§(?P<section>\d+)(?:[–-]\d+)?|(?:"|&quot;)(?P<heading>[^"&<]+)(?:"|&quot;)))?'
 )
-_MATH_ANCHORS = {
-    "1": "brackets",
-    "2": "filtration",
-    "3": "order",
-    "4": "privileged",
-    "5": "approximation",
-    "6": "error",
-    "7": "steering",
-    "8": "trident",
+_PAGES = {
+    "mathematics": "mathematics.md",
+    "interface": "interface.md",
+    "model files": "model-files.md",
+    "world files": "worlds.md",
 }
+#: A JSON schema's name in code (``nilpotent/plan@1``), not already in a link.
+_SCHEMA = re.compile(r"(?<!>)<code>(?P<schema>nilpotent/[\w-]+@\d+)</code>(?!</a>)")
+_HEADING = re.compile(r"^#+ (?P<title>.*?) \{#(?P<id>[\w-]+)\}\s*$", re.MULTILINE)
+
+
+def _headings() -> tuple[dict[str, str], dict[str, str], dict[str, str]]:
+    """``mathematics.md``'s numbered sections (``"3" -> "order"``), ``interface.md``'s
+    headings (title -> id) and its schema sections (``"nilpotent/plan@1" -> "plan"``)."""
+    docs = Path(__file__).resolve().parents[1]
+    math = {}
+    for m in _HEADING.finditer((docs / "mathematics.md").read_text(encoding="utf-8")):
+        number, _, _ = m.group("title").partition(". ")
+        if number.isdigit():
+            math[number] = m.group("id")
+    interface, schemas = {}, {}
+    for m in _HEADING.finditer((docs / "interface.md").read_text(encoding="utf-8")):
+        title = m.group("title")
+        interface[title] = m.group("id")
+        if title.startswith("`nilpotent/"):
+            schemas[title.strip("`")] = m.group("id")
+    return math, interface, schemas
 
 
 def _short_names() -> dict[str, str]:
@@ -388,22 +410,47 @@ def cross_references(html_text: str) -> str:
     return _XREF.sub(link, html_text)
 
 
-def design_notes(html_text: str, page) -> str:
-    """``MATH.md §N`` / ``INTERFACE.md`` in the docstrings: links to the site's pages."""
+def page_references(html_text: str, page) -> str:
+    """The docstrings' mentions of the site's pages as links (on the API pages):
+    ``the mathematics page, §N`` (a numbered section of ``mathematics.md``), ``the
+    interface page`` (with ``, "Heading"``: that heading of ``interface.md``), ``the
+    Model files page``, ``the World files page``; and every ``nilpotent/NAME@1`` schema
+    in code to its section of ``interface.md``.  A section that does not exist fails the
+    build (``ValueError``)."""
     from mkdocs.utils import get_relative_url
 
-    def link(m: re.Match[str]) -> str:
-        if m.group("note") == "MATH":
-            target, text = "mathematics.md", "the mathematics"
-            anchor = _MATH_ANCHORS.get(m.group("section") or "")
-            if anchor:
-                target, text = f"{target}#{anchor}", f"{text}, §{m.group('section')}"
-        else:
-            target, text = "interface.md", "the interface"
-        url = get_relative_url(target.replace(".md", "/"), page.url)
-        return f'<a href="{url}">{text}</a>'
+    if not page.url.startswith("api/"):
+        return html_text
+    math, interface, schemas = _headings()
 
-    return _NOTE.sub(link, html_text)
+    def url(target: str) -> str:
+        path, _, anchor = target.partition("#")
+        relative = get_relative_url(path.replace(".md", "/"), page.url)
+        return relative + (f"#{anchor}" if anchor else "")
+
+    def link(m: re.Match[str]) -> str:
+        page_name = " ".join(m.group("page").split()).lower()
+        target = _PAGES[page_name]
+        section, heading = m.group("section"), m.group("heading")
+        if section is not None:
+            if page_name != "mathematics" or section not in math:
+                raise ValueError(f"{page.url}: no section §{section} on the {page_name} page")
+            target += f"#{math[section]}"
+        elif heading is not None:
+            key = " ".join(heading.split())
+            if page_name != "interface" or key not in interface:
+                raise ValueError(f"{page.url}: no heading {key!r} on the {page_name} page")
+            target += f"#{interface[key]}"
+        return f'<a href="{url(target)}">{m.group(0)}</a>'
+
+    def schema(m: re.Match[str]) -> str:
+        anchor = schemas.get(m.group("schema"))
+        if anchor is None:
+            raise ValueError(f"{page.url}: schema {m.group('schema')} is not on the interface page")
+        return f'<a href="{url("interface.md#" + anchor)}">{m.group(0)}</a>'
+
+    html_text = _PAGE_REF.sub(link, html_text)
+    return _SCHEMA.sub(schema, html_text)
 
 
 def on_page_content(html_text: str, page, config, files) -> str:
@@ -426,7 +473,7 @@ def on_page_content(html_text: str, page, config, files) -> str:
 
     html_text = cross_references(html_text)
     html_text = _ROLE.sub("<code>", html_text)  # roles left over (not a dotted name)
-    html_text = design_notes(html_text, page)
+    html_text = page_references(html_text, page)
     return _MATH.sub(typeset, html_text)
 
 

@@ -1,6 +1,6 @@
 """Strict JSON: the one encoder of everything the tool prints or writes as JSON.
 
-JSON has no NaN or infinity (INTERFACE.md, "JSON numbers"): :func:`json_text`
+JSON has no NaN or infinity (the interface page, "JSON output"): :func:`json_text`
 writes a non-finite float as ``null`` and lists where under ``"undefined"`` of a
 top-level object, so a reader knows why the value is missing. numpy scalars and
 arrays are converted; an integer too long to print (Python's 4300-digit limit)
@@ -67,8 +67,8 @@ def json_object(obj: Any) -> Any:
     """``obj`` as strict JSON data: what every ``to_json()`` returns.
 
     :func:`json_safe`, and for an object with non-finite numbers, their places
-    under ``"undefined"`` (``{"paths": [...], "why": ...}``, INTERFACE.md "JSON
-    numbers"), so that ``json.dumps(result.to_json(), allow_nan=False)`` always works.
+    under ``"undefined"`` (``{"paths": [...], "why": ...}``, the interface page, "JSON
+    output"), so that ``json.dumps(result.to_json(), allow_nan=False)`` always works.
     """
     undefined: list[str] = []
     clean = json_safe(obj, undefined=undefined)
@@ -82,7 +82,7 @@ def json_object(obj: Any) -> Any:
 
 def json_text(obj: Any) -> str:
     """The JSON text of ``obj``: no NaN/infinity (undefined values become ``null`` and are
-    listed under ``"undefined"`` of a top-level object, INTERFACE.md "JSON numbers")."""
+    listed under ``"undefined"`` of a top-level object, the interface page, "JSON output")."""
     return json.dumps(json_object(obj), indent=2, allow_nan=False) + "\n"
 
 

@@ -60,9 +60,6 @@ EXIT_INTERNAL = 70
 GLOBAL_FLAGS = ("--debug", "--quiet")
 """Flags read by :func:`main` wherever they stand (before a ``--``)."""
 
-REPORT_URL = "https://github.com/nilpotent-robotics/nilpotent/issues"
-
-
 def _split_flags(args: list[str]) -> tuple[list[str], set[str]]:
     flags: set[str] = set()
     rest: list[str] = []
@@ -97,11 +94,15 @@ def _interrupted(as_json: bool) -> int:
 
 
 def _internal_error(exc: BaseException, as_json: bool, debug: bool) -> int:
+    # no report address: the project publishes none (pyproject.toml has no [project.urls])
+    from nilpotent.version import __version__
+
     what = f"{type(exc).__name__}: {literal(exc, 300)}"
     message = (
         f"internal error ({what}). This is a bug in nilpotent, not in your input: please "
-        f"report it with the command line at {REPORT_URL}"
-        + ("" if debug else " (add --debug for the traceback)")
+        "report it to the project's maintainers with the command line, this message and "
+        f"the versions (nilpotent {__version__}, Python {sys.version.split()[0]})"
+        + ("" if debug else "; add --debug for the traceback")
     )
     if debug:
         with contextlib.suppress(OSError, ValueError, AttributeError):

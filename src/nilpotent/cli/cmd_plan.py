@@ -36,13 +36,18 @@ from nilpotent.cli.plan_options import (
     FromOpt,
     LimitOpt,
     MarginOpt,
+    MaxAccelOpt,
     MaxPieceOpt,
+    MaxSpeedOpt,
     PlannerOpt,
     SeedOpt,
     TimeLimitOpt,
     ToOpt,
+    TrajectoryOutOpt,
+    TrajectoryStepOpt,
     WorldOpt,
     command_budget,
+    parse_bound_option,
     plan_from_options,
 )
 from nilpotent.errors import OptionError
@@ -75,9 +80,17 @@ ObjectiveOpt = Annotated[
     str,
     typer.Option("--objective", metavar="WHAT",
                  help="Local steering: reach (straight segment and loops, default) or length "
-                      "(shortest geodesics of the step-2 approximation)."),
+                      "(shortest normal geodesics of the nilpotent approximation: closed form "
+                      "for step 2, shooting above)."),
 ]
 
+RefineOpt = Annotated[
+    str,
+    typer.Option("--refine", metavar="HOW",
+                 help="none (default) or ocp: shorten a direct plan by optimal control of the "
+                      "true system (CasADi + IPOPT; needs pip install \"nilpotent[ocp]\"), "
+                      "kept only if it verifies and is shorter."),
+]
 
 ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
 
@@ -137,6 +150,16 @@ def _print_plan(glob) -> None:
         console.print(f"clearance to obstacles: {v.clearance:.4g}")
     if v.min_singular_margin is not None:
         console.print(f"smallest singular margin: {v.min_singular_margin:.4g}")
+    ref = glob.refinement
+    if ref is not None:
+        console.print(f"refinement ocp: {'applied' if ref.applied else 'not applied'}, length "
+                      f"{ref.length_before:.6g} -> {glob.plan.length:.6g}"
+                      + (f" ({ref.reason})" if ref.reason else ""))
+    if glob.timed is not None:
+        timed = glob.timed
+        console.print(
+            f"re-timed (TOPP-RA): duration {timed.duration:.4g}, {timed.times.size} samples, "
+            f"{len(timed.stops)} stops; max |u| {float(abs(timed.inputs).max()):.4g}")
     verdict = "reached" if v.error <= result.tol else "NOT reached"
     console.print(f"goal {verdict}: error {v.error:.3e} (tol {result.tol:g}; re-simulated)")
 
@@ -160,6 +183,11 @@ def plan_command(
     max_iterations: MaxItOpt = 30,
     objective: ObjectiveOpt = "reach",
     planner: PlannerOpt = "rrtconnect",
+    refine: RefineOpt = "none",
+    max_speed: MaxSpeedOpt = None,
+    max_accel: MaxAccelOpt = None,
+    trajectory_out: TrajectoryOutOpt = None,
+    trajectory_step: TrajectoryStepOpt = None,
     plot: PlotOpt = None,
     animate: AnimateOpt = None,
     json_out: JsonOpt = False,
@@ -175,6 +203,7 @@ def plan_command(
     """
     from nilpotent.planning.iterative import ANCHORS
     from nilpotent.planning.length import OBJECTIVES
+    from nilpotent.planning.ocp import check_refine
     from nilpotent.planning.optimal_planner import PLANNERS
 
     if not (math.isfinite(tol) and tol > 0):
@@ -190,21 +219,35 @@ def plan_command(
     if planner not in PLANNERS:
         raise OptionError(
             f"--planner must be {' or '.join(PLANNERS)}; got {literal(planner, 60)!r}")
+    check_refine(refine)
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
     if not (math.isfinite(max_piece) and max_piece > 0):
         raise OptionError(f"--max-piece must be a positive number, got {max_piece}")
     _check_outputs(plot, animate)
+    check_writable(trajectory_out, "--trajectory-out")
     system = load_model_option(model, param)
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
+    speed = parse_bound_option(max_speed, system, "--max-speed")
+    accel = parse_bound_option(max_accel, system, "--max-accel", every=True)
+    if accel is None and (speed is not None or trajectory_out is not None
+                          or trajectory_step is not None):
+        given = "--max-speed" if speed is not None else (
+            "--trajectory-out" if trajectory_out is not None else "--trajectory-step")
+        raise OptionError(f"{given} needs --max-accel (the re-timed inputs are continuous "
+                          "only with bounded accelerations)")
     with work(f"plan {system.name}"), command_budget(time_limit):
         result = plan_from_options(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,
-            clearance=clearance, objective=objective, planner=planner,
+            clearance=clearance, objective=objective, refine=refine, max_speed=speed,
+            max_accel=accel, trajectory_step=trajectory_step, planner=planner,
         )
     write_pictures(result, plot, animate)
+    if trajectory_out is not None and result.timed is not None:
+        with write_atomically(trajectory_out) as tmp:
+            tmp.write_text(result.timed.to_csv(), encoding="utf-8")
     if json_out:
         emit_json(result.to_json())
         return

@@ -89,6 +89,67 @@ MaxPieceOpt = Annotated[
 ]
 
 
+MaxSpeedOpt = Annotated[
+    str | None,
+    typer.Option("--max-speed", metavar="V",
+                 help="Re-time the plan (TOPP-RA) with |u_i| <= V for every input, or per "
+                      "input u1=V1,u2=V2 (inputs left out: no speed bound); needs --max-accel."),
+]
+
+MaxAccelOpt = Annotated[
+    str | None,
+    typer.Option("--max-accel", metavar="A",
+                 help="Re-time the plan (TOPP-RA) with |du_i/dt| <= A for every input, or "
+                      "u1=A1,u2=A2 naming every input; adds \"trajectory\" to --json."),
+]
+
+TrajectoryOutOpt = Annotated[
+    Path | None,
+    typer.Option("--trajectory-out", metavar="FILE",
+                 help="Write the re-timed trajectory as CSV (t, coordinates, inputs); needs "
+                      "--max-accel."),
+]
+
+TrajectoryStepOpt = Annotated[
+    float | None,
+    typer.Option("--trajectory-step", metavar="DT",
+                 help="Largest time between trajectory samples (default: duration / 500).",
+                 parser=bounded_float("--trajectory-step", 0.0, open_low=True)),
+]
+
+
+def parse_bound_option(text: str | None, system, option: str, *, every: bool = False
+                       ) -> tuple[float, ...] | None:
+    """``--max-speed``/``--max-accel``: ``V`` (every input) or ``u1=V1,u2=V2``; values are
+    expressions (``pi/2``), checked by :func:`nilpotent.planning.timing.bound_values`."""
+    from nilpotent.core.model.expressions import parse_expression, real_value
+    from nilpotent.core.model.points import check_magnitude
+    from nilpotent.planning.timing import bound_values
+
+    if text is None:
+        return None
+
+    def number(piece: str) -> float:
+        where = option
+        if not piece.strip():
+            raise OptionError(f"{option} {text!r}: a bound is missing")
+        return check_magnitude(real_value(parse_expression(piece, {}, where=where), where=where),
+                               where)
+
+    if "=" not in text:
+        return bound_values(system.m, number(text), option, every=every)
+    named: dict[str, float] = {}
+    for part in text.split(","):
+        name, eq, value = part.partition("=")
+        name = name.strip()
+        if not (eq and name):
+            raise OptionError(f"{option} {text!r}: expected V or u1=V1,u2=V2")
+        if name in named:
+            raise OptionError(f"{option}: {name} given twice")
+        named[name] = number(value)
+    return bound_values(system.m, named, option, every=every)
+
+
 def parse_limit_options(texts: list[str] | None, system) -> dict[str, tuple[float, float]]:
     """``--limit NAME=LO:HI`` (repeatable) → ``{name: (lo, hi)}``; LO, HI are expressions."""
     from nilpotent.core.model.expressions import parse_expression, real_value
@@ -134,7 +195,8 @@ def command_budget(time_limit: float):
 
 def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
                       max_piece, *, anchor="auto", max_iterations=30, clearance=0.0,
-                      objective="reach", planner="rrtconnect"):
+                      objective="reach", refine="none", max_speed=None, max_accel=None,
+                      trajectory_step=None, planner="rrtconnect"):
     """Load the world, merge the limits and run the global planner (shared with ``execute``)."""
     from nilpotent.planning.global_planner import plan_global
     from nilpotent.planning.world import load_world
@@ -151,5 +213,6 @@ def plan_from_options(system, start, goal, tol, world, limit, singular_margin, t
         system, start, goal, tol, world=the_world, limits=limits,
         singular_margin=singular_margin, time_limit=time_limit, seed=seed,
         max_piece=max_piece, anchor=anchor, max_iterations=max_iterations, clearance=clearance,
-        objective=objective, planner=planner,
+        objective=objective, refine=refine, max_speed=max_speed, max_accel=max_accel,
+        trajectory_step=trajectory_step, planner=planner,
     )

@@ -10,7 +10,7 @@ iterate over.
 * :func:`get_model` builds a built-in (``"unicycle"``, ``"car-trailers:3"``)
   and applies parameter values;
 * :func:`load_system` accepts a built-in name or the path of a ``.toml`` /
-  ``.json`` model file (``INTERFACE.md``).
+  ``.json`` model file (the Model files page).
 
 Examples
 --------
@@ -178,7 +178,7 @@ class ModelInfo:
         return ", ".join(f"{k}={v}" for k, v in self.parameters.items())
 
     def to_json(self) -> dict[str, object]:
-        """This entry as one element of the ``nilpotent/models@1`` list (``INTERFACE.md``)."""
+        """This entry as one element of the ``nilpotent/models@1`` list (the interface page)."""
         return json_object({
             "name": self.usage,
             "example": self.example_spec,
@@ -346,7 +346,7 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
     ----------
     spec:
         A built-in spec (see :func:`get_model`) or a path to a model file in
-        the ``INTERFACE.md`` format, read by
+        the format of the Model files page, read by
         :func:`nilpotent.core.model.modelfile.load_model_file`.
     params:
         Parameter values applied with

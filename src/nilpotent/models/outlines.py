@@ -1,6 +1,6 @@
 r"""Outlines and default joint limits of the built-in robots (for planning among obstacles).
 
-**Trident snake** (all three forms; MATH.md §8).  Body: the equilateral
+**Trident snake** (all three forms; the mathematics page, §8).  Body: the equilateral
 triangle of circumradius ``r`` with vertices
 ``V_i = (x, y) + r (cos(θ+α_i), sin(θ+α_i))``; legs: the segments
 ``V_i → W_i``, ``W_i = V_i + l (cos ψ_i, sin ψ_i)``, ``ψ_i = θ + α_i + φ_i``;

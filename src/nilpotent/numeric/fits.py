@@ -1,7 +1,7 @@
 r"""Log–log fits: the measured exponent of a power law $e \approx C A^s$.
 
 The scaling of the nilpotent approximation's error with the loop amplitude
-(MATH.md §6: $O(A^{w+1})$ in the privileged coordinates of weight $w$) is
+(the mathematics page, §6: $O(A^{w+1})$ in the privileged coordinates of weight $w$) is
 measured, never assumed, as the least-squares slope of $\log e$ against
 $\log A$ over the errors above the integration noise floor (the model for
 convergence orders fitted from slopes: diffrax's tests).

@@ -7,7 +7,7 @@ $\tau = t - (d_0 + \dots + d_{s-1})$ from 0 to $d_s$) input ``i`` is
 
     u_i(t) = a_{s,i} + \sum_{k=1}^{K} b_{s,i,k}\cos(k\omega_s\tau) + c_{s,i,k}\sin(k\omega_s\tau),
 
-exactly the segment format of the ``nilpotent/plan@1`` JSON of INTERFACE.md
+exactly the segment format of the ``nilpotent/plan@1`` JSON of the interface page
 (``constant`` = $a$, ``cos[k-1]`` = $b_k$, ``sin[k-1]`` = $c_k$).
 
 * :class:`Signal` — ``B`` such controls as read-only arrays (a single control
@@ -207,7 +207,7 @@ class Segment:
         return Segment(self.duration, self.omega, tuple(new_inputs))
 
     def to_dict(self) -> dict[str, Any]:
-        """The INTERFACE.md plan-segment object ``{"duration", "omega", "inputs"}``."""
+        """The plan-segment object (``nilpotent/plan@1``) ``{"duration", "omega", "inputs"}``."""
         return {
             "duration": self.duration,
             "omega": self.omega,
@@ -377,7 +377,7 @@ class Signal:
     # --- plan segments ---------------------------------------------------------------
     @classmethod
     def from_segments(cls, segments: Sequence[Any]) -> Signal:
-        """A single control from plan segments: :class:`Segment` objects or INTERFACE.md dicts.
+        """A single control from plan segments: :class:`Segment` objects or plan-segment dicts.
 
         Each segment has ``duration``, ``omega`` and ``inputs``; each input has
         ``constant``, ``cos`` (coefficients of ``cos kωt``, k = 1..) and ``sin``.
@@ -430,7 +430,7 @@ class Signal:
         )
 
     def to_segments(self, row: int = 0) -> list[dict[str, Any]]:
-        """Control ``row`` in the INTERFACE.md plan-segment form:
+        """Control ``row`` in the plan-segment form of ``nilpotent/plan@1``:
         ``[{"duration", "omega", "inputs": [{"constant", "cos", "sin"}, ...]}, ...]``."""
         return [seg.to_dict() for seg in self.segments(row)]
 

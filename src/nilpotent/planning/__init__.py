@@ -1,7 +1,7 @@
 """Steering: exact steering of nilpotent systems, iterative steering of the true system.
 
 * :func:`plan` — iterative steering of a system with its nilpotent
-  approximations (MATH.md §7), returning a :class:`Plan`;
+  approximations (the mathematics page, §7), returning a :class:`Plan`;
 * :func:`steer_nilpotent` — exact steering of a nilpotent (triangular
   polynomial) system in privileged coordinates;
 * :class:`Segment`, :class:`InputSignal` — controls as data (the

@@ -15,7 +15,7 @@ A control is a sequence of :class:`Segment`; within a segment of duration
 
 with ``t`` restarting from 0 in every segment (``a_{ik}`` is ``cos[k-1]``,
 ``b_{ik}`` is ``sin[k-1]``: exactly the segment format of the
-``nilpotent/plan@1`` JSON in INTERFACE.md).  Segments follow one another.
+``nilpotent/plan@1`` JSON of the interface page).  Segments follow one another.
 
 Everything here is float data; nothing is symbolic.
 """

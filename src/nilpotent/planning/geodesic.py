@@ -9,7 +9,7 @@ The metric makes ``X̂_1..X̂_m`` orthonormal: the length of a control is
     \dot h = B u, \qquad \dot v = \sum_i u_i A_i h,
 
 ``B`` (``n₁×m``) the constant weight-1 components, ``A_i`` (``n₂×n₁``) the
-linear weight-2 components of ``X̂_i`` (MATH.md §5: ``P_ij`` is homogeneous of
+linear weight-2 components of ``X̂_i`` (the mathematics page, §5: ``P_ij`` is homogeneous of
 weighted degree ``w_j − 1``).
 
 **Normal geodesics** (Pontryagin, ``H = ½Σ_i u_i²``, ``u_i = ⟨p, X̂_i(y)⟩``):
@@ -30,21 +30,31 @@ is ``‖u₀‖``.
 ``z = (u, U)`` solves the linear ODE ``ż = F z``, ``F = [[Ω, 0], [I, 0]]``, so
 ``M`` is a block of ``G = ∫₀¹ e^{tF} z₀z₀ᵀ e^{tFᵀ} dt``, which Van Loan's block
 exponential gives exactly: ``exp([[−F, z₀z₀ᵀ], [0, Fᵀ]]) = [[e^{−F}, e^{−F}G], [0, e^{Fᵀ}]]``.
-No time stepping.  The Jacobian in ``(u₀, λ)`` is exact too (complex step: the
-map is real-analytic and built without conjugation), all ``1 + m + n₂``
-exponentials in one batched :func:`scipy.linalg.expm` call.
+No time stepping.  For ``m ≤ 3`` the same ``U(1)`` and ``M`` come in closed form
+from Rodrigues' formula (:mod:`nilpotent.planning.geodesic_forms`: nine scalar
+functions of ``θ²``), much cheaper than the block exponential, which is kept
+for ``m ≥ 4``.  The Jacobian in ``(u₀, λ)`` is exact too (complex step: the map
+is real-analytic and built without conjugation), batched.
 
 **Boundary problem.**  Find ``(u₀, λ)`` with ``y(1) = goal``: Levenberg–Marquardt
 (minimum-norm steps) on the problem dilated to unit size (``δ_λ`` maps
-geodesics to geodesics, lengths scale by ``λ``), from several starts — the
-straight segment ``u₀ = B⁺Δh, λ = 0`` (exact when the goal's vertical part is
-what the straight line gives), and covectors along ``±`` the remaining vertical
-displacement with rotation angles ``‖Ω‖ ∈ {π, 1.9π}``.  The shortest
-converged extremal is kept.  For two inputs and one vertical coordinate
-(Heisenberg up to a linear change: the unicycle's and the Heisenberg system's
-approximations) the minimiser is known in closed form (a circular arc whose
-area with the chord gives the vertical displacement) and serves as the single
-start; the general multi-start runs only if it does not converge.
+geodesics to geodesics, lengths scale by ``λ``), from near-exact starts where a
+closed form exists:
+
+* two inputs and one vertical coordinate (Heisenberg up to a linear change:
+  the unicycle's and the Heisenberg system's approximations): the minimiser is
+  a circular arc whose area with the chord gives the vertical displacement;
+* three inputs and three vertical coordinates spanning the brackets (the free
+  (3,6) group up to a linear change: the trident snake's approximation): the
+  rotations reduce the six equations to two in the axis angle and the rotation
+  angle, whose solutions are all sought (a scan, the helix limit, Newton) and
+  the three shortest polished
+  (:func:`~nilpotent.planning.geodesic_forms.free3_starts`).
+
+Otherwise, or if those do not converge, a multi-start: the straight segment
+``u₀ = B⁺Δh, λ = 0`` (exact when the goal's vertical part is what the straight
+line gives), and covectors along ``±`` the remaining vertical displacement with
+rotation angles ``‖Ω‖ ∈ {π, 1.9π}``.  The shortest converged extremal is kept.
 
 Its controls ``e^{tΩ}u₀`` are harmonic: for
 ``m ≤ 3`` the skew ``Ω`` has one frequency ``θ`` and, by Rodrigues' formula,
@@ -56,11 +66,13 @@ refused.)
 What is *not* claimed: that a normal extremal found is the global minimiser in
 every step-2 group (strictly abnormal minimisers exist in some step-2 Carnot
 groups, Golé–Karidi 1995).  For the Heisenberg group the result is checked
-against the closed-form distance (tests).
+against the closed-form distance, for the free (3,6) group against closed forms
+(goals with ``x ⊥ w``, vertical goals) and a brute multi-start (tests).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -70,6 +82,7 @@ import numpy as np
 from nilpotent.errors import PlanningError
 from nilpotent.numeric.signals import InputSignal, Segment
 from nilpotent.numeric.types import State
+from nilpotent.planning.geodesic_forms import free3_maps, free3_starts, rodrigues_integrals
 from nilpotent.planning.triangular import TriangularSystem
 
 __all__ = [
@@ -108,6 +121,11 @@ class Step2Structure:
     a: np.ndarray
     t: np.ndarray
     skew: np.ndarray
+
+    @functools.cached_property
+    def free3_maps(self) -> tuple[np.ndarray, ...] | None:
+        """:func:`~nilpotent.planning.geodesic_forms.free3_maps` (``None``: not of that type)."""
+        return free3_maps(self.b, self.skew)
 
     @property
     def m(self) -> int:
@@ -179,7 +197,8 @@ class Step2Structure:
             Shape ``(B, n)``.
         """
         omega = np.einsum("bk,kij->bij", lam, self.skew)
-        u_int, mm = _van_loan_integrals(omega, u0)
+        integrals = rodrigues_integrals if self.m <= 3 else _van_loan_integrals
+        u_int, mm = integrals(omega, u0)
         h0 = y0[list(self.h_index)]
         out = np.tile(y0.astype(u0.dtype), (u0.shape[0], 1))
         out[:, list(self.h_index)] += u_int @ self.b.T
@@ -301,18 +320,28 @@ def _lm(
 
 
 def _first_guess(st: Step2Structure, ys: np.ndarray, yg: np.ndarray) -> np.ndarray | None:
-    """The closed-form guess of :func:`_contact_starts` of the better sense (``None``: n/a)."""
+    """Near-exact starts ``(u₀, λ)`` where a closed form exists (``None``: n/a).
+
+    Two inputs, one vertical coordinate: :func:`_contact_starts` (the better
+    sense); three inputs and three vertical coordinates spanning the brackets
+    (the free (3,6) group up to a linear change):
+    :func:`~nilpotent.planning.geodesic_forms.free3_starts`.
+    """
     hi, vi = list(st.h_index), list(st.v_index)
+    if st.m == 3:
+        maps = st.free3_maps
+        return None if maps is None else free3_starts(
+            maps, st.a, st.t, (ys[hi], ys[vi]), (yg[hi], yg[vi]))
     if not (st.m == 2 and len(vi) == 1 and st.b.shape == (2, 2) and st.skew[0, 1, 0] != 0):
         return None
     u_line = np.linalg.solve(st.b, yg[hi] - ys[hi])
     line_end = st.endpoints(ys, u_line[None, :], np.zeros((1, 1)))[0]
     resid = float(yg[vi[0]] - line_end[vi[0]])
     if resid == 0.0:
-        return np.concatenate([u_line, [0.0]])
+        return np.concatenate([u_line, [0.0]])[None, :]
     guesses = np.array(_contact_starts(st, u_line, resid))
     ends = st.endpoints(ys, guesses[:, :2], guesses[:, 2:])
-    return guesses[int(np.argmin(np.max(np.abs(ends - yg), axis=1)))]
+    return guesses[[int(np.argmin(np.max(np.abs(ends - yg), axis=1)))]]
 
 
 def _starts(st: Step2Structure, ys: np.ndarray, yg: np.ndarray) -> list[np.ndarray]:
@@ -377,7 +406,7 @@ def _contact_starts(st: Step2Structure, u_line: np.ndarray, resid: float) -> lis
 
     In the plane ``(∫u₁, ∫u₂)`` (where the metric is Euclidean) a geodesic is a
     circular arc; a loop of signed area ``a`` moves ``v`` by ``a·κ``,
-    ``κ = [X̂₁, X̂₂]_v`` (MATH.md §1).  The area ``a = resid/κ`` between arc
+    ``κ = [X̂₁, X̂₂]_v`` (the mathematics page, §1).  The area ``a = resid/κ`` between arc
     and chord (``ρ = ‖u_line‖``) fixes the arc's angle θ:
     ``|a|/ρ² = (θ − sin θ)/(8 sin²(θ/2))``; the length is ``ρθ / (2 sin(θ/2))``
     (``√(4π|a|)`` for ``ρ = 0``).  Both rotation senses are offered; the
@@ -498,9 +527,12 @@ def shortest_geodesic(
     best: tuple[float, np.ndarray, float] | None = None
     converged = 0
     first = _first_guess(st, us, ug)
-    finals, errs = _lm(st, us, ug, first[None, :]) if first is not None else ([], [])
+    finals, errs = _lm(st, us, ug, first) if first is not None else ([], [])
     if not any(e <= UNIT_TOL * 10 for e in errs):  # the general multi-start
-        finals, errs = _lm(st, us, ug, np.array(_starts(st, us, ug)))
+        starts = np.array(_starts(st, us, ug))
+        if first is not None:
+            starts = np.concatenate([starts, first])
+        finals, errs = _lm(st, us, ug, starts)
     for params, err in zip(finals, errs, strict=True):
         if err <= UNIT_TOL * 10:
             converged += 1
@@ -522,7 +554,7 @@ def shortest_geodesic(
     return Geodesic(
         tuple(float(v) for v in u0),
         tuple(float(v) for v in lam),
-        float(np.linalg.norm(u0)),
+        float(np.linalg.norm(params[: st.m])) * scale,  # (‖u₀‖ itself underflows below 1e-154)
         tuple(float(v) for v in reached),
         err,
         converged,

@@ -33,6 +33,7 @@ Every returned plan is re-simulated as a whole (:func:`~nilpotent.planning.verif
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import time
@@ -58,8 +59,10 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
-from nilpotent.planning.optimal_planner import PLANNERS, is_vehicle, optimal_path, reversals
+from nilpotent.planning.ocp import Refinement, check_refine, refine_route
+from nilpotent.planning.optimal_planner import PLANNERS, rrtstar_path
 from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.timing import TimedTrajectory, input_bounds, motion_fields, retime
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
 from nilpotent.progress import report as report_progress
@@ -93,8 +96,6 @@ DENSE_CHECK_POINTS = 200
 #: The direct attempt (one nilpotent plan, the old behaviour) is made for goals this close
 #: (configuration-space Euclidean distance).
 DIRECT_RADIUS = 2.0
-#: ``planner="rrtstar"``: the share of its time that RRT* spends improving its first path.
-IMPROVE_FRACTION = 0.5
 #: Configurations checked at once along a straight chord (memory).
 CHORD_CHUNK = 20_000
 
@@ -142,10 +143,15 @@ class GlobalPlan(PlanFigure):
     clearance_required:
         The distance robot–obstacles the motion had to exceed (``clearance`` of
         :func:`plan_global`; model length units).
+    refinement:
+        What the optimal-control refinement did (``refine="ocp"`` of :func:`plan_global`:
+        :class:`~nilpotent.planning.ocp.Refinement`), or ``None`` when none was asked for.
+    timed:
+        The plan re-timed under the input bounds of :func:`plan_global`
+        (:func:`~nilpotent.planning.timing.retime`), or ``None`` when none were given.
     planner, path_cost, cost_history:
-        The holonomic stage's planner (:data:`~nilpotent.planning.optimal_planner.PLANNERS`);
-        for ``"rrtstar"`` the ball–box cost of its path and the best cost after each of its
-        slices (``(seconds, cost)``; :mod:`nilpotent.planning.optimal_planner`).
+        The holonomic stage (``"rrtconnect"``, ``"rrtstar"``); for ``"rrtstar"`` its path's
+        ball–box cost and the best ``(seconds, cost)`` after each slice.
     """
 
     plan: Plan
@@ -160,6 +166,8 @@ class GlobalPlan(PlanFigure):
     time_limit: float = math.inf
     seconds: float = field(default=0.0)
     clearance_required: float = 0.0
+    refinement: Refinement | None = None
+    timed: TimedTrajectory | None = None
     planner: str = "rrtconnect"
     path_cost: float | None = None
     cost_history: tuple[tuple[float, float], ...] = ()
@@ -180,7 +188,7 @@ class GlobalPlan(PlanFigure):
         return self.plan._repr_html_()
 
     def to_json(self) -> dict[str, Any]:
-        """``nilpotent/plan@1`` (INTERFACE.md) with ``world``, ``limits``, ``waypoints``,
+        """``nilpotent/plan@1`` (the interface page) with ``world``, ``limits``, ``waypoints``,
         ``clearance``, ``limits_ok``, ``min_singular_margin`` and more; no NaN/Infinity
         (undefined numbers are null, ``null_reasons`` says why)."""
         v = self.verification
@@ -192,8 +200,6 @@ class GlobalPlan(PlanFigure):
             reasons["self_clearance"] = f"model {self.plan.system.name} names no body pairs"
         if self.path_cost is None:
             reasons["path_cost"] = "the holonomic stage (rrtconnect, or none) has no cost"
-        if not is_vehicle(self.plan.system):
-            reasons["reversals"] = f"model {self.plan.system.name} has no drive input"
         if v.min_singular_margin is None:
             reasons["min_singular_margin"] = f"model {self.plan.system.name} defines no " \
                 "singular margin"
@@ -214,8 +220,6 @@ class GlobalPlan(PlanFigure):
             "planner": self.planner,
             "path_cost": self.path_cost,
             "cost_history": [list(c) for c in self.cost_history],
-            "reversals": (reversals(self.plan.segments)
-                          if is_vehicle(self.plan.system) else None),
             "seconds": self.seconds,
             "pieces": [
                 {"target": list(p.target), "first_segment": p.first_segment,
@@ -226,6 +230,9 @@ class GlobalPlan(PlanFigure):
         })
         if self.world is not None:
             out["world_definition"] = self.world.to_json()
+        if self.refinement is not None:
+            out["refinement"] = self.refinement.to_json()
+        out.update(motion_fields(self.plan.system, self.plan.segments, self.timed, reasons))
         return plan_json(out, reasons)
 
 
@@ -397,6 +404,10 @@ def plan_global(
     path_clearance: float = PATH_CLEARANCE,
     hold_shape: bool = True,
     objective: str = "reach",
+    refine: str = "none",
+    max_speed: float | Sequence[float] | dict[str, float] | None = None,
+    max_accel: float | Sequence[float] | dict[str, float] | None = None,
+    trajectory_step: float | None = None,
     planner: str = "rrtconnect",
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
@@ -447,11 +458,27 @@ def plan_global(
         The local steering's objective, ``"reach"`` or ``"length"``
         (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
         :func:`~nilpotent.planning.iterative.plan`).
+    refine:
+        ``"none"`` (default) or ``"ocp"``: the plan found is refined by direct optimal
+        control of the true system, minimising its length under the limits
+        (:func:`nilpotent.planning.ocp.refine_segments`; needs the ``ocp`` extra; the
+        obstacles are not constraints of that problem), and the refined controls are
+        kept only if they verify and are shorter (:attr:`GlobalPlan.refinement` says
+        what happened).
+    max_speed, max_accel:
+        Bounds on the inputs of the re-timed motion, ``|ũ_i| ≤ V_i`` and
+        ``|dũ_i/dt| ≤ A_i``: a number (every input), ``m`` numbers, or
+        ``{"u1": V, ...}`` (a speed bound may leave inputs out: unbounded; an
+        acceleration bound must name them all).  Given, the verified plan is
+        re-timed by TOPP-RA (:func:`~nilpotent.planning.timing.retime`) into
+        :attr:`GlobalPlan.timed`; ``max_speed`` needs ``max_accel``.
+    trajectory_step:
+        Largest time between the samples of the re-timed motion (default: its
+        duration / 500).
     planner:
-        The holonomic stage: ``"rrtconnect"`` (OMPL RRTConnect, shortest Euclidean path
-        after simplification; a straight chord when it is free) or ``"rrtstar"`` (OMPL
-        RRT* under the sub-Riemannian ball–box cost, anytime: it improves its path for a
-        quarter of the time left after its first; :mod:`nilpotent.planning.optimal_planner`).
+        The holonomic stage: ``"rrtconnect"`` (OMPL RRTConnect; a free straight chord is
+        taken as is) or ``"rrtstar"`` (OMPL RRT* under the ball–box cost, anytime:
+        :mod:`nilpotent.planning.optimal_planner`).
 
     Raises
     ------
@@ -463,17 +490,27 @@ def plan_global(
         The time limit ran out before a plan was found and verified (every
         step is bounded by it: :mod:`nilpotent.planning.budget`), or the plan
         would need more than :data:`MAX_PIECES` pieces.
+    MissingExtraError
+        ``refine="ocp"`` without CasADi.
     """
+    check_refine(refine)
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
+    bounds = input_bounds(sys.m, max_speed, max_accel, step=trajectory_step)
     with budget.time_budget(time_limit):
-        return _plan_global(
+        result = _plan_global(
             sys, start, goal, tol, world=world, limits=limits,
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
             max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
             path_clearance=path_clearance, hold_shape=hold_shape, objective=objective,
-            planner=planner)
+            refine=refine, planner=planner)
+        if bounds is None:
+            return result
+        p = result.plan
+        timed = retime(sys, p.start, p.segments, bounds, step=trajectory_step,
+                       reached=p.reached, engine=engine)
+        return dataclasses.replace(result, timed=timed)
 
 
 def _plan_global(
@@ -496,6 +533,7 @@ def _plan_global(
     path_clearance: float,
     hold_shape: bool,
     objective: str,
+    refine: str,
     planner: str = "rrtconnect",
 ) -> GlobalPlan:
     t0 = time.perf_counter()
@@ -528,7 +566,12 @@ def _plan_global(
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
-        v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
+        refinement = refine_route(refine, checker, x0, xg, segments, tol, engine)
+        v = None
+        if refinement is not None and refinement[1].applied:
+            segments, v = refinement[0], refinement[1].verification  # verified as below
+        if v is None:
+            v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "
@@ -549,9 +592,9 @@ def _plan_global(
         return GlobalPlan(whole, world, checker.limits, singular_margin,  # type: ignore[arg-type]
                           tuple(tuple(float(c) for c in w) for w in waypoints), tuple(pieces),
                           v, route, planner_s, time_limit, time.perf_counter() - t0,
-                          checker.clearance, planner,
-                          found[-1].cost if found else None,
-                          found[-1].cost_history if found else ())
+                          checker.clearance, None if refinement is None else refinement[1],
+                          planner=planner, path_cost=found[-1].cost if found else None,
+                          cost_history=found[-1].cost_history if found else ())
 
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
@@ -567,13 +610,7 @@ def _plan_global(
     # 2. a path in configuration space, with room around it where possible
     planner_s = 0.0
 
-    def path_fn(*args: Any, **kwargs: Any) -> list[np.ndarray]:
-        if planner == "rrtconnect":
-            return ompl_path(*args, **kwargs)
-        best = optimal_path(*args, **kwargs, improve_seconds=IMPROVE_FRACTION * args[3],
-                            piece=max_piece)
-        found.append(best)
-        return [np.array(p) for p in best.points]
+    path_fn = ompl_path if planner == "rrtconnect" else rrtstar_path(found, max_piece)
 
     path_valid = checker.valid
     if world is not None and path_clearance > 0:

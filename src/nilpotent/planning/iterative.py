@@ -1,4 +1,4 @@
-"""Iterative steering of the true system with nilpotent approximations (MATH.md §7).
+"""Iterative steering of the true system with nilpotent approximations (the mathematics page, §7).
 
 Algorithm (Bellaïche–Jean–Risler; Vendittelli–Oriolo–Jean–Laumond), from
 ``x_0 = start``:
@@ -123,7 +123,8 @@ class Plan(PlanFigure):
     start, goal:
         Float points in the model's coordinates.
     segments:
-        The controls (INTERFACE.md plan segments), in order from ``start``.
+        The controls (the segments of ``nilpotent/plan@1``, the interface page), in
+        order from ``start``.
     reached:
         The state the true system reaches under ``segments`` (numerical
         integration, DOP853 at rtol 1e-12).
@@ -170,7 +171,7 @@ class Plan(PlanFigure):
         return float(sum(s.duration for s in self.segments))
 
     def to_json(self) -> dict[str, Any]:
-        """The ``nilpotent/plan@1`` object of INTERFACE.md (plus extra fields), strict JSON.
+        """The ``nilpotent/plan@1`` object of the interface page (plus extra fields), strict JSON.
 
         Numbers that are not finite (the homogeneous ``distance`` of a Newton
         refinement step, which computes none) are ``null`` and listed under
@@ -461,7 +462,7 @@ def plan(
     anchor:
         Where the approximations are taken:
 
-        * ``"current"``: at every iterate (MATH.md §7);
+        * ``"current"``: at every iterate (the mathematics page, §7);
         * ``"goal"``: once, at the goal;
         * ``"start"``: once, at the start: the plan is computed *backwards*
           from the goal to the start (anchored at its goal, the start) and
@@ -504,8 +505,8 @@ def plan(
     objective : str
         What the local steering optimises (:data:`nilpotent.planning.length.OBJECTIVES`):
         ``"reach"`` (default: straight segment and loops, or Newton) or
-        ``"length"`` (the shortest normal geodesic of each step-2 approximation;
-        step ≤ 2 only).
+        ``"length"`` (the shortest normal geodesic of each approximation: closed
+        form for step 2, shooting above, :mod:`nilpotent.planning.shooting`).
 
     Raises
     ------

@@ -3,20 +3,27 @@
 * :data:`OBJECTIVES` — what the local steering optimises: ``"reach"`` (today's
   straight segment and loops, or Newton for step ≥ 3: reach the goal, no
   length criterion) or ``"length"`` (the shortest normal geodesic of the
-  step-2 nilpotent approximation, :mod:`nilpotent.planning.geodesic`);
-* :func:`length_report` — the ``length``, ``lower_bound`` and ``length_ratio``
-  fields every plan's JSON carries.
+  nilpotent approximation: closed form for step 2,
+  :mod:`nilpotent.planning.geodesic`; shooting for step ≥ 3,
+  :mod:`nilpotent.planning.shooting`);
+* :func:`length_report` — the ``length``, ``lower_bound``, ``length_ratio`` and
+  ``abnormal`` fields every plan's JSON carries.
 
 ``lower_bound`` is the sub-Riemannian distance from start to goal of the
 nilpotent approximation at the start, computed as the length of the shortest
-normal geodesic found (:func:`~nilpotent.planning.geodesic.shortest_geodesic`).
+normal geodesic found (:func:`~nilpotent.planning.geodesic.shortest_geodesic`,
+or :func:`~nilpotent.planning.shooting.shortest_normal_geodesic` for step ≥ 3).
 Where the approximation reproduces the system (its fields agree with the
 system's at the goal and at seeded random points, to 1e-12: ``heisenberg``)
 this is the exact distance of the system, so ``length ≥ lower_bound`` holds for
 every plan (``lower_bound_kind = "exact"``).  For other systems it is the
 distance of the first-order approximation: equal to the true distance to first
-order in the distance, not a certified bound (``"approximation"``).  ``null`` (with a
-reason) for step ≥ 3, at singular points, or when no geodesic converged.
+order in the distance, not a certified bound (``"approximation"``); for step
+≥ 3 the shooting's multi-start may also miss the shortest branch, so it is not
+certified even for the approximation.  ``abnormal`` (step ≥ 3) says whether
+that geodesic is also a singular curve (the endpoint map's differential along
+it has rank < n); ``null`` for step 2 (not checked).  ``null`` (with a reason)
+at singular points, or when no geodesic converged.
 """
 
 from __future__ import annotations
@@ -99,19 +106,26 @@ def _reproduces(system: ControlSystem, model: Any, goal: np.ndarray) -> bool:
 
 def _approximation_distance(
     system: ControlSystem, start: Sequence[float], goal: Sequence[float]
-) -> tuple[float | None, str, bool]:
-    from nilpotent.planning.local_model import choose_builder, numeric_model
+) -> tuple[float | None, str, bool, bool | None]:
+    """Length of the shortest geodesic found of the approximation at the start, why not,
+    whether the approximation is the system, and whether the geodesic is abnormal."""
+    from nilpotent.planning.local_model import choose_builder, numeric_model, symbolic_model
 
     x0 = np.asarray(start, dtype=float)
     xg = np.asarray(goal, dtype=float)
     try:
         if choose_builder(system, x0) != "numeric":
-            return None, "the step is above 2 near the start: no geodesic distance computed", False
+            from nilpotent.planning.shooting import shortest_normal_geodesic
+
+            model = symbolic_model(system, x0)
+            shot = shortest_normal_geodesic(model.nilpotent, np.zeros(system.n),
+                                            model.forward(xg))
+            return shot.length, "", False, shot.abnormal
         model = numeric_model(system, x0)
         geo = shortest_geodesic(model.nilpotent, np.zeros(system.n), model.forward(xg))
     except NilpotentError as exc:
-        return None, f"no geodesic of the approximation at the start: {exc}", False
-    return geo.length, "", _reproduces(system, model, xg)
+        return None, f"no geodesic of the approximation at the start: {exc}", False, None
+    return geo.length, "", _reproduces(system, model, xg), None
 
 
 def length_report(
@@ -120,7 +134,8 @@ def length_report(
     goal: Sequence[float],
     segments: Sequence[Segment],
 ) -> tuple[dict[str, Any], dict[str, str]]:
-    """The plan JSON's ``length``, ``lower_bound``, ``lower_bound_kind`` and ``length_ratio``.
+    """The plan JSON's ``length``, ``lower_bound``, ``lower_bound_kind``, ``length_ratio``
+    and ``abnormal``.
 
     Parameters
     ----------
@@ -137,8 +152,10 @@ def length_report(
         The fields, and for each one that is ``None`` the reason.
     """
     length = control_length(segments)
-    bound, why, exact = _approximation_distance(system, start, goal)
+    bound, why, exact, abnormal = _approximation_distance(system, start, goal)
     reasons: dict[str, str] = {}
+    if abnormal is None:
+        reasons["abnormal"] = why or "checked for step >= 3 (the shooting) only"
     kind: str | None = None
     ratio: float | None = None
     if bound is None:
@@ -155,6 +172,7 @@ def length_report(
         "lower_bound": bound,
         "lower_bound_kind": kind,
         "length_ratio": ratio,
+        "abnormal": abnormal,
     }, reasons
 
 

@@ -1,6 +1,6 @@
 """Local nilpotent models of a system at float points, for iterative steering.
 
-A :class:`LocalModel` bundles what one iteration of MATH.md §7 needs at a base
+A :class:`LocalModel` bundles what one iteration of the mathematics page, §7, needs at a base
 point ``p``: the nilpotent approximation as a float
 :class:`~nilpotent.planning.triangular.TriangularSystem` in privileged
 coordinates ``y``, and the maps ``x ↦ y(x)`` and ``y ↦ x(y)``.
@@ -14,7 +14,7 @@ Two builders (registry :data:`BUILDERS`):
     lexicographic: the length-2 Hall words) completing a basis, with
     ``[X_a,X_b](p) = DX_b(p)X_a(p) − DX_a(p)X_b(p)``.  With ``F`` the matrix
     of the frame at ``p`` and ``A = F⁻¹``: ``y = A(x − p)``, ``x = p + F y``
-    (privileged when the step is ≤ 2, MATH.md §4).  In these coordinates
+    (privileged when the step is ≤ 2, the mathematics page, §4).  In these coordinates
     ``X_i`` reads ``A X_i(p + F y)``; keeping the terms of weighted degree
     ``w_j − 1`` gives ``X̂_i``: the constants ``(A X_i(p))_j`` for ``w_j = 1``,
     and ``Σ_{w_l = 1} (A DX_i(p) F)_{jl} y_l`` for ``w_j = 2``.  Costs a few

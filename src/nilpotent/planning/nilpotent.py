@@ -1,4 +1,4 @@
-"""Exact steering of nilpotent systems in privileged coordinates (MATH.md §7).
+"""Exact steering of nilpotent systems in privileged coordinates (the mathematics page, §7).
 
 Input: a :class:`~nilpotent.planning.triangular.TriangularSystem` (the fields
 ``X̂_i`` of a nilpotent approximation as polynomials in privileged coordinates
@@ -66,7 +66,7 @@ from nilpotent.planning.triangular import TriangularSystem
 
 
 class StepTooHighError(PlanningError):
-    """A steering method of step ≤ 2 (``"step2"``, ``"geodesic"``) asked of a higher step.
+    """A steering method of step ≤ 2 (``"step2"``) asked of a higher step.
 
     Not a failure of one steering: callers that retry smaller pieces or other
     dampings re-raise it, so the user sees this message rather than a
@@ -282,13 +282,18 @@ def _newton(system: TriangularSystem, ys: np.ndarray, yg: np.ndarray, seed: int)
 
 
 def _geodesic(system: TriangularSystem, ys: np.ndarray, yg: np.ndarray, seed: int) -> list[Segment]:
+    if system.step > 2:  # normal-geodesic shooting (imports this module's types)
+        from nilpotent.planning.shooting import shooting_segments
+
+        return shooting_segments(system, ys, yg, seed)
     from nilpotent.planning.geodesic import geodesic_segments  # imports this module's types
 
     return geodesic_segments(system, ys, yg, seed)
 
 
 #: Steering methods by name: ``f(system, y_start_unit, y_goal_unit, seed) -> segments``.
-#: ``"geodesic"``: the shortest normal geodesic, step ≤ 2 (:mod:`nilpotent.planning.geodesic`).
+#: ``"geodesic"``: the shortest normal geodesic found: closed form for step ≤ 2
+#: (:mod:`nilpotent.planning.geodesic`), shooting above (:mod:`nilpotent.planning.shooting`).
 METHODS: dict[str, Callable[[TriangularSystem, np.ndarray, np.ndarray, int], list[Segment]]] = {
     "step2": lambda system, ys, yg, seed: _closed_form(system, ys, yg),
     "newton": _newton,
@@ -318,7 +323,8 @@ def steer_nilpotent(
         Points in those coordinates.
     method:
         ``"step2"`` (closed form; step ≤ 2), ``"newton"`` (any step),
-        ``"geodesic"`` (shortest, step ≤ 2) or
+        ``"geodesic"`` (shortest normal geodesic; closed form for step ≤ 2,
+        shooting above) or
         ``"auto"`` (``"step2"`` when the step is ≤ 2, else ``"newton"``).
     seed:
         Seed of the random restarts of ``"newton"`` (results are reproducible).
@@ -350,12 +356,10 @@ def steer_nilpotent(
         method = "step2" if system.step <= 2 else "newton"
     if method not in METHODS:
         raise PlanningError(f"unknown steering method {method!r} (known: {', '.join(METHODS)})")
-    if method in ("step2", "geodesic") and system.step > 2:
-        what = ("shortest steering (objective 'length', method 'geodesic')"
-                if method == "geodesic" else f"the {method!r} method")
+    if method == "step2" and system.step > 2:
         raise StepTooHighError(
-            f"{what} needs step <= 2; this nilpotent approximation has step {system.step}"
-            + (" (use objective 'reach')" if method == "geodesic" else "")
+            f"the {method!r} method needs step <= 2; this nilpotent approximation has step "
+            f"{system.step}"
         )
     ys = np.asarray(y_start, dtype=float)
     yg = np.asarray(y_goal, dtype=float)

@@ -36,8 +36,6 @@ by the validity check every ``resolution`` (as RRTConnect's).  The path is then
 cut into pieces and every piece steered and verified on the true system by the
 global planner (nothing here is returned unverified).
 
-:func:`reversals` counts the sign changes of a vehicle's drive input along a
-plan (``car``, ``unicycle``, ``car-trailers:K``: input 1 is the rear speed).
 """
 
 from __future__ import annotations
@@ -57,28 +55,25 @@ import sympy as sp
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import PlanningError
 from nilpotent.planning import budget
-from nilpotent.planning.controls import Segment
 from nilpotent.planning.holonomic_path import box
 from nilpotent.planning.verify import Checker
 
 __all__ = [
-    "PLANNERS", "VEHICLES", "BallBoxMetric", "OptimalPath", "ball_box_metric", "optimal_path",
-    "reversals",
+    "IMPROVE_FRACTION", "PLANNERS", "BallBoxMetric", "OptimalPath", "ball_box_metric",
+    "optimal_path", "rrtstar_path", "shortcut",
 ]
 
 #: Global planners of :func:`~nilpotent.planning.global_planner.plan_global`: the holonomic
 #: stage's OMPL planner.
 PLANNERS = ("rrtconnect", "rrtstar")
-#: Models whose first input is a drive speed (reversals counted and reported).
-VEHICLES = ("car", "unicycle", "car-trailers")
+#: The share of its time that RRT* spends improving its first path (:func:`rrtstar_path`).
+IMPROVE_FRACTION = 0.5
 #: Constant of the weight ≥ 2 terms of the ball–box cost (module doc).
 BOX_CONSTANT = 2.0 * math.sqrt(math.pi)
 #: Cost of a motion through a point where the frame is singular (not infinite: OMPL adds it).
 SINGULAR_COST = 1e9
 #: Length of one RRT* slice between two records of the best cost (seconds).
 SLICE_SECONDS = 0.25
-#: Samples per unit of duration when the drive input's sign is read (reversals).
-SIGN_SAMPLES = 64
 
 
 @dataclass(frozen=True, eq=False)
@@ -341,28 +336,17 @@ def _chord(valid: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarr
     return bool(np.all(valid(a + t * (b - a))))
 
 
-def is_vehicle(system: ControlSystem) -> bool:
-    """Whether the model's first input is a drive speed (:data:`VEHICLES`)."""
-    return system.name in VEHICLES or system.name.startswith("car-trailers")
+def rrtstar_path(found: list[OptimalPath], piece: float) -> Callable[..., list[np.ndarray]]:
+    """The holonomic stage of :func:`~nilpotent.planning.global_planner.plan_global` for
+    ``planner="rrtstar"``: :func:`optimal_path` with the signature of
+    :func:`~nilpotent.planning.holonomic_path.ompl_path` (``seconds`` its 4th argument),
+    improving for :data:`IMPROVE_FRACTION` of its time; each result is appended to
+    ``found``."""
 
+    def path(*args: Any, **kwargs: Any) -> list[np.ndarray]:
+        best = optimal_path(*args, **kwargs, improve_seconds=IMPROVE_FRACTION * args[3],
+                            piece=piece)
+        found.append(best)
+        return [np.array(p) for p in best.points]
 
-def reversals(segments: Sequence[Segment], drive: int = 0) -> int:
-    """Sign changes of input ``drive`` along ``segments`` (zeros skipped).
-
-    The input is sampled :data:`SIGN_SAMPLES` times per unit of duration (at least 64
-    per segment, and 8 per period of its highest harmonic); values below ``1e-9`` of
-    the largest magnitude count as zero.
-    """
-    values: list[np.ndarray] = []
-    for seg in segments:
-        k = max((s.harmonics for s in seg.inputs), default=0)
-        periods = k * seg.omega * seg.duration / (2 * math.pi)
-        count = max(64, math.ceil(SIGN_SAMPLES * seg.duration), math.ceil(8 * periods))
-        t = np.linspace(0.0, seg.duration, count)
-        values.append(seg.values(t)[drive])
-    if not values:
-        return 0
-    u = np.concatenate(values)
-    big = float(np.abs(u).max())
-    signs = np.sign(u[np.abs(u) > 1e-9 * big]) if big > 0 else np.array([])
-    return int(np.count_nonzero(np.diff(signs)))
+    return path

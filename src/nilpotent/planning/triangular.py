@@ -2,7 +2,7 @@
 
 In privileged coordinates ``y`` with weights ``w_1 ≤ … ≤ w_n`` the fields of a
 nilpotent approximation are ``X̂_i = Σ_j P_ij(y) ∂/∂y_j`` with ``P_ij`` weighted
-homogeneous of weighted degree ``w_j − 1`` (MATH.md §5).  Hence ``P_ij`` only
+homogeneous of weighted degree ``w_j − 1`` (the mathematics page, §5).  Hence ``P_ij`` only
 involves coordinates of weight ``< w_j`` (weight-1 components are constants):
 the system is *triangular*, and its flow under explicit inputs is computed by
 successive quadratures (:mod:`nilpotent.planning.exact_flow`).

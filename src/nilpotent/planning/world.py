@@ -1,6 +1,6 @@
 """Worlds: workspace bounds and obstacles (TOML world files), collision checks with shapely 2.
 
-A world file (INTERFACE.md, ``docs/worlds.md``)::
+A world file (the interface page, "Limits and worlds"; the World files page)::
 
     name = "room"
     [bounds]                  # optional: the workspace, model length units

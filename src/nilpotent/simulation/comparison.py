@@ -159,7 +159,7 @@ class Comparison:
         return self.approximate[-1]
 
     def to_json(self) -> dict[str, Any]:
-        """The ``nilpotent/simulation@1`` object of INTERFACE.md (plus a few added fields)."""
+        """The ``nilpotent/simulation@1`` object of the interface page (plus a few added fields)."""
         return json_object({
             "schema": "nilpotent/simulation@1",
             "model": self.system.name,

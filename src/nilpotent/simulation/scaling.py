@@ -3,7 +3,7 @@ r"""How the error of the nilpotent approximation scales with the loop amplitude.
 :func:`scaling_study` → :class:`ScalingStudy`: the errors of
 :func:`~nilpotent.simulation.comparison.compare_bracket_motion` over a range of
 amplitudes (one batch through the pair engine) and their fitted log–log slopes
-per weight group (expected $w_j + 1$, MATH.md §6 — measured here, not assumed;
+per weight group (expected $w_j + 1$, the mathematics page, §6 — measured here, not assumed;
 :mod:`nilpotent.numeric.fits`).
 """
 
@@ -56,7 +56,7 @@ class ScalingStudy:
         $\log A$, or ``None`` where fewer than two errors are above the
         integration noise floor (the approximation is exact there).
     expected_slopes:
-        weight $w$ → $w + 1$ (MATH.md §6).
+        weight $w$ → $w + 1$ (the mathematics page, §6).
     floor:
         The noise floor used: errors below it are not fitted.
     tolerance:
@@ -130,12 +130,25 @@ def scaling_study(
 
     Parameters
     ----------
-    sys, bracket, omega, periods, point : see :func:`compare_bracket_motion`
-        The system, the bracket ``(I, J)`` and the input's frequency, periods, start.
-    approximation, samples, settings, rtol, atol, engine : see :func:`compare_bracket_motion`
-        The approximation to compare with, samples per run, how to integrate
-        (default :data:`~nilpotent.simulation.comparison.BRACKET_SETTINGS`;
-        ``rtol``/``atol``/``engine``: the loose form, kept for one release).
+    sys : ControlSystem
+        The original system.
+    bracket : tuple of int
+        ``(I, J)``, 1-based, different.
+    omega : float
+        The input's frequency (as in :func:`compare_bracket_motion`).
+    periods : int
+        Periods of the input.
+    point : sequence or mapping, optional
+        The start $p$ (default the origin).
+    approximation : NilpotentApproximation, optional
+        The approximation to compare with (default: the one at ``point``).
+    samples : int
+        Sample times per run.
+    settings : IntegrationSettings or None
+        How to integrate (default
+        :data:`~nilpotent.simulation.comparison.BRACKET_SETTINGS`).
+    rtol, atol, engine : optional
+        The loose form of ``settings``, kept for one release.
     amplitudes : sequence of float
         Positive amplitudes, at least two different values.
 

@@ -12,7 +12,7 @@ The errors are measured in the privileged coordinates $y$ of $p$, per weight
 group $w$: $\max_{w_j = w}|y_j - \hat y_j|$ at the end point (``endpoint``) and
 its maximum over ``time_samples`` equally spaced times (``along``), plus the
 Euclidean distance of the two end points in model coordinates.  From $q_0 = p$
-the error of group $w$ scales like $A^{w+1}$ (MATH.md §6); from $q_0 \ne p$ at
+the error of group $w$ scales like $A^{w+1}$ (the mathematics page, §6); from $q_0 \ne p$ at
 distance $\rho \gg A$ it is only $O(A)$ (the approximation is good near $p$).
 
 **The frequency drops out.** Over whole periods, $s = \omega t$ turns

@@ -2,8 +2,8 @@
 
 :func:`plot_amplitude_panels`: the amplitude study of one model, one log–log
 panel per bracket (error of the nilpotent approximation over one period,
-privileged coordinates grouped by weight; theory: slope ≥ w + 1, ``MATH.md``
-§6), drawn with :func:`~nilpotent.viz.scaling.plot_error_scaling`.  Returns
+privileged coordinates grouped by weight; theory: slope ≥ w + 1, the mathematics
+page, §6), drawn with :func:`~nilpotent.viz.scaling.plot_error_scaling`.  Returns
 handles, never calls ``plt.show()``.
 """
 

@@ -1,6 +1,6 @@
 """The error of the nilpotent approximation against the input amplitude, log–log.
 
-``MATH.md`` §6: for a periodic input of amplitude ``A`` the error of the
+The mathematics page, §6: for a periodic input of amplitude ``A`` the error of the
 approximation in the privileged coordinates of weight ``w`` is ``O(A^{w+1})``.
 :func:`fit_slope` measures the exponent as the least-squares slope of
 ``log(error)`` against ``log(A)`` (the one fitter,

@@ -164,7 +164,7 @@ class Filtration:
         return typeset.filtration_display(self).html()
 
     def to_json(self) -> dict[str, object]:
-        """The ``nilpotent/analysis@1`` JSON object (``INTERFACE.md``).
+        """The ``nilpotent/analysis@1`` JSON object (the interface page).
 
         ``bracket_generating`` and ``regular`` are ``null`` when undetermined;
         ``undetermined`` is then an object saying what was tried (else ``null``).

@@ -3,7 +3,7 @@ r"""The nilpotent approximation of a system at a point, and its certificate.
 In privileged coordinates $y$ at $p$ (:mod:`nilpotent.core.coordinates.privileged`) write
 $X_i = \sum_j f_{ij}(y)\,\partial_{y_j}$.  Each $f_{ij}$ has weighted order
 $\ge w_j - 1$; keeping in $f_{ij}$ exactly its terms of weighted degree
-$w_j - 1$ gives $\hat X_i$ (``MATH.md`` §5).  Only the weighted Taylor jets of
+$w_j - 1$ gives $\hat X_i$ (the mathematics page, §5).  Only the weighted Taylor jets of
 the fields to degree $w_j$ are computed (:func:`nilpotent.core.coordinates.jets.weighted_jets`:
 $y_k \to t^{w_k} y_k$ and one univariate series in $t$), never a full
 expansion.
@@ -269,7 +269,7 @@ class NilpotentApproximation:
         return "\n".join(lines)
 
     def to_json(self) -> dict[str, object]:
-        """The ``nilpotent/approximation@1`` JSON object (``INTERFACE.md``).
+        """The ``nilpotent/approximation@1`` JSON object (the interface page).
 
         The analysis@1 keys of the filtration, plus ``method``, ``privileged``
         (names, expressions, inverse, exactness), ``fields``, ``fields_x`` and

@@ -1,7 +1,7 @@
 r"""Truncated polynomials with exact coefficients, and weighted Taylor jets at a point.
 
 This is the arithmetic under privileged coordinates and the nilpotent
-approximation (``MATH.md`` §4–5).  A :class:`Poly` is a sparse polynomial in
+approximation (the mathematics page, §4–5).  A :class:`Poly` is a sparse polynomial in
 ``nvars`` variables whose coefficients are exact symengine numbers
 (``1/2``, ``sqrt(3)/2``, ``cos(1/5)``; floats only where the input has floats).
 

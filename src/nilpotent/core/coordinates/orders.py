@@ -1,4 +1,4 @@
-"""Non-holonomic orders of functions and vector fields at a point (MATH.md §3).
+"""Non-holonomic orders of functions and vector fields at a point (the mathematics page, §3).
 
 * The order of a function $f$ at $p$ is the least $s$ such that some
   $X_{i_1}\\cdots X_{i_s} f\\,(p) \\ne 0$ (0 when $f(p) \\ne 0$, $\\infty$ when every
@@ -185,7 +185,7 @@ def field_order(
     """Non-holonomic order of a vector field given in privileged coordinates.
 
     With $Z = \\sum_j Z_j(z)\\,\\partial_{z_j}$ in privileged coordinates $z$
-    of weights $w$ (MATH.md §3): $\\mathrm{ord}(Z) \\ge \\sigma$ iff every
+    of weights $w$ (the mathematics page, §3): $\\mathrm{ord}(Z) \\ge \\sigma$ iff every
     $Z z_j = Z_j$ has order $\\ge w_j + \\sigma$, so
     $\\mathrm{ord}(Z) = \\min_j (\\mathrm{ord}_w(Z_j) - w_j)$, with $\\mathrm{ord}_w$
     the weighted order (:func:`weighted_order`).  Each $X_i$ has order $\\ge -1$.

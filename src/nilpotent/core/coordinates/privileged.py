@@ -1,7 +1,7 @@
 r"""Privileged coordinates at a point, with the certificate of their orders.
 
 Coordinates $y$ centred at $p$ are *privileged* when the non-holonomic order
-of each $y_j$ at $p$ equals the weight $w_j$ (``MATH.md`` §3–4).  All methods
+of each $y_j$ at $p$ equals the weight $w_j$ (the mathematics page, §3–4).  All methods
 start from the **linear adapted coordinates** $z = A(x - p)$, $A = B^{-1}$,
 where the columns of $B$ are the values $Y_1(p), \dots, Y_n(p)$ of the adapted
 frame of :func:`nilpotent.core.analysis.filtration.analyze`, and describe the

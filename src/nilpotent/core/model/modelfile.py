@@ -445,7 +445,7 @@ def _outline_point(raw: object, names: Mapping[str, sp.Symbol], where: str) -> t
 
 
 def outline_from_dict(raw: object, names: Mapping[str, sp.Symbol], source: str) -> Outline:
-    """The ``[geometry]`` table: ``polygons``, ``segments``, ``discs`` (INTERFACE.md).
+    """The ``[geometry]`` table: ``polygons``, ``segments``, ``discs`` (the Model files page).
 
     Every number is an expression of the coordinates and parameters (the safe
     grammar of :mod:`nilpotent.core.model.expressions`).
@@ -578,7 +578,7 @@ def load_model_file(path: str | Path) -> ControlSystem:
     Parameters
     ----------
     path : str or Path
-        The model file (format: ``INTERFACE.md``).
+        The model file (format: the Model files page).
 
     Raises
     ------

@@ -1,7 +1,7 @@
 """Box limits on coordinates and a robot's outline, as data a :class:`ControlSystem` carries.
 
 Neither changes the dynamics; they describe where the robot may go
-(INTERFACE.md "Limits, geometry and worlds"):
+(the interface page, "Limits and worlds"):
 
 * :class:`Limits` — closed intervals ``lo ≤ x_j ≤ hi`` on some coordinates
   (model units / radians), and *relative limits* ``lo ≤ g(q) ≤ hi`` on

@@ -34,7 +34,7 @@ vanishes; since ``sin ψ_i sin(θ+α_i) + cos ψ_i cos(θ+α_i) = cos φ_i``:
 
     ``−sin ψ_i ẋ + cos ψ_i ẏ + (r cos φ_i + l) θ̇ + l φ̇_i = 0``    (C_i)
 
-(this is ``MATH.md`` §8's constraint, re-derived here).  Three forms solve
+(this is the constraint of the mathematics page, §8, re-derived here).  Three forms solve
 (C_1..C_3) for ``q̇`` with different inputs:
 
 * :func:`trident_snake` — **body-velocity inputs** ``(v1, v2, v3)`` = forward

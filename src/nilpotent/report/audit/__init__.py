@@ -22,7 +22,7 @@ $u_i = -A\omega\sin\omega t$, $u_j = A\omega\cos\omega t$ moves the state by
 $\pi A^2 [X_i, X_j](p) + O(A^3)$ per period.
 
 Each :class:`AuditEntry` has the fields of the ``nilpotent/audit@1`` schema
-(``INTERFACE.md``): ``id, section, statement, paper, computed, verdict
+(the interface page): ``id, section, statement, paper, computed, verdict
 (agrees|differs), explanation``.
 
 The package follows the paper: :mod:`.entries` (the result types),

@@ -135,7 +135,7 @@ class Computed:
         return function_order(self.vf, as_expr(sum(row[j] * X[j] for j in range(6))), None, 4)
 
     def field_order(self, field: Sequence[sp.Expr]) -> float:
-        """Non-holonomic order at 0 of a vector field on eq. vf's space (``MATH.md`` §3).
+        """Non-holonomic order at 0 of a vector field on eq. vf's space (the mathematics page, §3).
 
         In privileged coordinates ``z`` (approximate()'s), ``ord(Z) = min_j ord(Z z_j) − w_j``.
         """

@@ -1,6 +1,6 @@
 """The audit's result types: one checked statement (:class:`AuditEntry`) and the audit.
 
-The fields are those of the ``nilpotent/audit@1`` schema (``INTERFACE.md``):
+The fields are those of the ``nilpotent/audit@1`` schema (the interface page):
 ``id, section, statement, paper, computed, verdict (agrees|differs), explanation``.
 """
 
@@ -79,7 +79,7 @@ class Audit:
         raise KeyError(entry_id)
 
     def to_json(self) -> dict[str, Any]:
-        """The ``nilpotent/audit@1`` object of ``INTERFACE.md`` (plus a summary)."""
+        """The ``nilpotent/audit@1`` object of the interface page (plus a summary)."""
         return json_object({
             "schema": AUDIT_SCHEMA,
             "paper_sha256": self.paper_sha256,

@@ -186,7 +186,8 @@ def check_first_order(paper: PaperContent, c: Computed) -> Iterable[AuditEntry]:
         + "; for approximate()'s X̂i: "
         + ", ".join(str(o) for o in ours),
         ok,
-        "orders computed in approximate()'s privileged coordinates (MATH.md §3)"
+        "orders computed in approximate()'s privileged coordinates (the mathematics page of "
+        "the documentation, §3)"
         + (
             ""
             if ok

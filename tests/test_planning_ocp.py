@@ -1,0 +1,217 @@
+"""``--refine ocp``: a plan refined by direct optimal control of the true system (CasADi).
+
+Checked independently of the product: the refined segments (their JSON) are
+re-simulated by ``tests/replay.py`` (scipy's DOP853 on the sympy fields); the
+Heisenberg lengths are compared with Dido's closed-form distance (an arc of angle
+φ with ``|x₃|/r² = (φ − sin φ)/(8 sin²(φ/2))``, ``d = rφ/(2 sin(φ/2))``), which every
+admissible motion exceeds; the sympy → CasADi translation is compared with sympy's own
+numerical evaluation.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+import sys
+
+import numpy as np
+import pytest
+import sympy as sp
+from scipy.optimize import brentq
+
+import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
+from nilpotent.core.model.outline import Limits
+from nilpotent.errors import MissingExtraError, OptionError
+from nilpotent.models import get_model
+from nilpotent.planning import plan
+from nilpotent.planning.controls import constant_segment
+from nilpotent.planning.geodesic import control_length
+from nilpotent.planning.global_planner import plan_global
+from nilpotent.planning.ocp import INTERVALS, check_refine, refine_segments, to_casadi
+from nilpotent.planning.verify import Checker
+from replay import resimulate
+
+# the `ocp` extra (part of the `test` extra); the missing-extra tests need no CasADi
+needs_casadi = pytest.mark.skipif(importlib.util.find_spec("casadi") is None,
+                                  reason='needs pip install "nilpotent[ocp]"')
+
+
+def heisenberg_distance(x1: float, x2: float, x3: float) -> float:
+    """Dido's problem (module docstring)."""
+    r, z = math.hypot(x1, x2), abs(x3)
+    if r == 0:
+        return math.sqrt(4 * math.pi * z)
+    if z == 0:
+        return r
+    q = z / r**2
+    phi = brentq(lambda p: (p - math.sin(p)) / (8 * math.sin(p / 2) ** 2) - q,
+                 1e-9, 2 * math.pi - 1e-12, xtol=1e-15, rtol=1e-15)
+    return r * phi / (2 * math.sin(phi / 2))
+
+
+#: Piecewise-constant controls on N intervals approximate the geodesic (a circular arc of
+#: total angle φ ≤ 2π, turned at constant rate) to second order in the angle per interval
+#: α = φ/N: the inscribed polygon's length is L·sin(α/2)/(α/2) = L(1 − α²/24 + …).  The
+#: bound allows 4× that leading term at the worst angle 2π (the area the polygon misses is
+#: made up by a change of the same order).
+DISCRETISATION = 4 * (2 * math.pi / INTERVALS) ** 2 / 24
+
+
+def segment_dicts(segments) -> list[dict]:
+    return [s.to_dict() for s in segments]
+
+
+@needs_casadi
+def test_translation_agrees_with_sympy() -> None:
+    import casadi as ca
+
+    x, y = sp.symbols("x y")
+    exprs = [
+        sp.sin(x) * sp.cos(y) - sp.tan(x) / 3, sp.exp(x) * sp.log(2 + y**2),
+        sp.sqrt(1 + x**2) ** 3, sp.atan(x) + sp.atan2(y, x - 2), sp.sinh(x) - sp.cosh(y),
+        sp.tanh(x * y) + sp.pi * sp.E, x ** sp.Rational(3, 2) + abs(y) * sp.sign(y),
+        1 / sp.cos(y) + sp.Max(x, y) - sp.Min(x, 2 * y), (x + 1) ** (y / 5),
+    ]
+    xs, ys = ca.SX.sym("x"), ca.SX.sym("y")
+    rng = np.random.default_rng(3)
+    for expr in exprs:
+        fn = ca.Function("f", [xs, ys], [to_casadi(expr, {x: xs, y: ys})])
+        for _ in range(5):
+            a, b = rng.uniform(0.1, 1.2, size=2)
+            want = float(expr.subs({x: a, y: b}).evalf(30))
+            assert float(fn(a, b)) == pytest.approx(want, rel=1e-12, abs=1e-12), expr
+
+
+@needs_casadi
+def test_translation_refuses_what_it_cannot_express() -> None:
+    import casadi as ca
+
+    x, p = sp.symbols("x p")
+    with pytest.raises(OptionError, match="no coordinate"):
+        to_casadi(x * p, {x: ca.SX.sym("x")})
+    with pytest.raises(OptionError, match="cannot translate"):
+        to_casadi(sp.gamma(x), {x: ca.SX.sym("x")})
+
+
+@needs_casadi
+def test_heisenberg_refined_length_is_the_closed_form_distance() -> None:
+    h = get_model("heisenberg")
+    goal = (0.5, 0.3, 0.4)
+    warm = plan(h, (0, 0, 0), goal)  # loops: far from the shortest
+    segs, info = refine_segments(Checker(h), (0, 0, 0), goal, warm.segments, 1e-8)
+    assert info.applied, info.reason
+    states = resimulate(h, (0, 0, 0), segment_dicts(segs))
+    assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-8
+    d = heisenberg_distance(*goal)
+    length = control_length(segs)
+    assert length <= control_length(warm.segments)
+    assert d * (1 - 1e-9) <= length <= d * (1 + DISCRETISATION)
+
+
+@needs_casadi
+def test_a_shortest_plan_is_not_replaced() -> None:
+    """The geodesic plan of Heisenberg is already the shortest (its approximation is the
+    system): the piecewise-constant refinement is longer, so the plan stays as it is."""
+    h = get_model("heisenberg")
+    goal = (0.2, -0.4, 0.3)
+    best = plan(h, (0, 0, 0), goal, objective="length")
+    segs, info = refine_segments(Checker(h), (0, 0, 0), goal, best.segments, 1e-8)
+    assert not info.applied and "not shorter" in info.reason
+    assert segs == list(best.segments)
+
+
+X1 = sp.Symbol("x1")
+
+
+@needs_casadi
+@pytest.mark.parametrize("limits", [
+    Limits((("x1", -0.25, 0.25),)),
+    Limits(relative=(("x1^2", X1**2, 0.0, 0.0625),)),  # the same strip, as a relative limit
+], ids=["box", "relative"])
+def test_limits_are_kept(limits) -> None:
+    """A vertical Heisenberg goal whose shortest motion (a circle of diameter d/π ≈ 0.8)
+    leaves the strip |x1| ≤ 0.25.  Warm start: a rectangle in the strip enclosing the area
+    x3 = 0.5 (x3 = ½∮ x1 dx2 − x2 dx1), length 3.3; the refined motion keeps to the strip,
+    so it is longer than d, and shorter than the rectangle."""
+    h = get_model("heisenberg")
+    goal = (0.0, 0.0, 0.5)
+    lo, hi = -0.25, 0.25
+    checker = Checker(h, limits=limits)
+    rectangle = [constant_segment(u) for u in
+                 ((0.2, 0.0), (0.0, 1.25), (-0.4, 0.0), (0.0, -1.25), (0.2, 0.0))]
+    assert np.linalg.norm(resimulate(h, (0, 0, 0), segment_dicts(rectangle))[-1] - goal) < 1e-12
+    segs, info = refine_segments(checker, (0, 0, 0), goal, rectangle, 1e-8)
+    assert info.applied, info.reason
+    states = resimulate(h, (0, 0, 0), segment_dicts(segs))
+    assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-8
+    assert lo <= states[:, 0].min() and states[:, 0].max() <= hi
+    assert np.all(checker.valid(states))
+    assert heisenberg_distance(*goal) * (1 + DISCRETISATION) < control_length(segs) < 3.3
+
+
+@needs_casadi
+@pytest.mark.slow
+def test_global_plan_refined_reaches_the_goal_and_is_shorter() -> None:
+    system, goal = get_model("unicycle"), (0.3, 0.2, 0.5)
+    start = (0.0,) * system.n
+    g = plan_global(system, start, goal, refine="ocp")
+    ref = g.refinement
+    assert ref is not None and ref.applied, ref
+    data = json.loads(json.dumps(g.to_json(), allow_nan=False))
+    states = resimulate(system, start, data["segments"])
+    assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-8
+    assert data["length"] <= ref.length_before
+    assert data["refinement"]["applied"] is True
+    checker = Checker(system)
+    assert np.all(checker.valid(states))
+
+
+def test_missing_casadi_names_the_extra(monkeypatch) -> None:
+    monkeypatch.setitem(sys.modules, "casadi", None)
+    with pytest.raises(MissingExtraError, match=r'pip install "nilpotent\[ocp\]"'):
+        plan_global(get_model("unicycle"), (0, 0, 0), (0.1, 0, 0), refine="ocp")
+    check_refine("none")  # no refinement needs nothing
+
+
+def test_cli_missing_casadi_and_unknown_value(run_cli, monkeypatch) -> None:
+    status, stdout, _ = run_cli("plan", "unicycle", "--to", "x=0.1", "--refine", "bogus",
+                                "--json")
+    assert status == 2 and json.loads(stdout)["error"]["kind"] == "option"
+    monkeypatch.setitem(sys.modules, "casadi", None)
+    status, stdout, _ = run_cli("plan", "unicycle", "--to", "x=0.1", "--refine", "ocp",
+                                "--json")
+    assert status == 2
+    err = json.loads(stdout)["error"]
+    assert err["kind"] == "missing-extra" and "nilpotent[ocp]" in err["message"]
+
+
+@needs_casadi
+def test_a_refinement_that_misses_the_tolerance_is_refused() -> None:
+    """A tolerance below what any re-simulation meets (1e-17: under the rounding of the
+    goal's coordinates): the refined controls are refused and the plan stays, with why."""
+    h = get_model("heisenberg")
+    goal = (0.5, 0.3, 0.4)
+    warm = plan(h, (0, 0, 0), goal)
+    segs, info = refine_segments(Checker(h), (0, 0, 0), goal, warm.segments, 1e-17)
+    assert not info.applied and "miss the goal" in info.reason
+    assert info.length_refined is not None and info.length_refined < info.length_before
+    assert segs == list(warm.segments)
+
+
+@needs_casadi
+def test_a_refined_motion_through_an_obstacle_is_refused() -> None:
+    """Obstacles are not constraints of the optimal control problem, only of the
+    verification: the car's straight drive (the shortest motion) through a pillar is
+    found, refused as not admissible, and the plan is kept unchanged."""
+    from nilpotent.planning.world import world_from_dict
+
+    car = get_model("car")
+    world = world_from_dict({"name": "pillar", "bounds": {"x": [-3.0, 9.0], "y": [-4.0, 4.0]},
+                             "obstacles": [{"disc": {"center": [3.0, 0.0], "radius": 0.3}}]})
+    warm = [constant_segment((3.0, 0.0)), constant_segment((3.0, 0.0))]
+    goal = (6.0, 0.0, 0.0, 0.0)
+    segs, info = refine_segments(Checker(car, world), (0, 0, 0, 0), goal, warm, 1e-8)
+    assert not info.applied and "not admissible" in info.reason and "obstacle" in info.reason
+    assert segs == warm
+    assert info.length_refined == pytest.approx(6.0, rel=1e-6)  # the straight drive
