@@ -195,7 +195,8 @@ def plan_command(
     """Steer MODEL from --from to --to within its limits and around the --world's obstacles.
 
     Small problems are solved by iterated exact steering of nilpotent
-    approximations; otherwise a collision-free path from OMPL (RRTConnect) is
+    approximations; otherwise a collision-free path from OMPL (RRTConnect, or RRT* with
+    --planner rrtstar) is
     steered piece by piece, halving pieces whose motion leaves the free space.
     Every plan is re-simulated densely and checked (clearance, limits, error).
     --json gives the controls as segments (schema nilpotent/plan@1):
