@@ -561,7 +561,7 @@ def _plan_global(
             reached=v.reached, error=v.error, iterations=tuple(iterations),
             trajectory=Trajectory(v.times, v.states), tol=tol, anchor=last.anchor,
             builder=last.builder, initial_error=float(np.linalg.norm(xg - x0)),
-            seconds=time.perf_counter() - t0,
+            seconds=time.perf_counter() - t0, objective=objective,
         )
         return GlobalPlan(whole, world, checker.limits, singular_margin,  # type: ignore[arg-type]
                           tuple(tuple(float(c) for c in w) for w in waypoints), tuple(pieces),

@@ -145,6 +145,8 @@ class Plan(PlanFigure):
         ``‖start − goal‖``.
     seconds:
         Wall-clock time of the planning.
+    objective:
+        The local steering's objective (``"reach"`` or ``"length"``).
     """
 
     system: ControlSystem
@@ -160,6 +162,7 @@ class Plan(PlanFigure):
     builder: str = "numeric"
     initial_error: float = 0.0
     seconds: float = 0.0
+    objective: str = "reach"
     converged: bool = field(init=False)
 
     def __post_init__(self) -> None:
@@ -219,7 +222,7 @@ class Plan(PlanFigure):
     def length_fields(self) -> tuple[dict[str, Any], dict[str, str]]:
         """``length`` (``∫‖u‖ dt``), ``lower_bound``, ``lower_bound_kind``, ``length_ratio``
         and the reasons for the null ones (:func:`nilpotent.planning.length.length_report`)."""
-        return length_report(self.system, self.start, self.goal, self.segments)
+        return length_report(self.system, self.start, self.goal, self.segments, self.objective)
 
     @property
     def length(self) -> float:
@@ -647,6 +650,7 @@ def _plan(
         builder=builder,
         initial_error=initial_error,
         seconds=time.perf_counter() - t_start,
+        objective=objective,
     )
     if failure and raise_on_failure:
         raise PlanningError(
