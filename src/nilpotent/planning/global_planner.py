@@ -52,15 +52,17 @@ from nilpotent.errors import (
     PlanningError,
     SingularPointError,
 )
+from nilpotent.numeric.settings import IntegrationSettings, resolve_settings
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
-from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
+from nilpotent.progress import ProgressEvent
 from nilpotent.progress import report as report_progress
 from nilpotent.strict_json import json_safe
 
@@ -348,7 +350,7 @@ def steer_admissible(
     # every sample is admissible, only the cover of the motion between samples (margins
     # of half a step) failed: sample more densely (smaller steps, smaller margins)
     _, dense = simulate_path(system, x, list(p.segments), DENSE_CHECK_POINTS,
-                             options.get("engine", "auto"))
+                             options.get("settings", PLANNING_SETTINGS))
     if not checker.valid_motion(dense):
         return None
     return p
@@ -366,7 +368,7 @@ def plan_global(
     time_limit: float = 60.0,
     seed: int | None = 0,
     max_piece: float = MAX_PIECE,
-    engine: str = "auto",
+    engine: str | None = None,
     direct: bool = True,
     anchor: str = "auto",
     max_iterations: int = 30,
@@ -374,6 +376,7 @@ def plan_global(
     path_clearance: float = PATH_CLEARANCE,
     hold_shape: bool = True,
     objective: str = "reach",
+    settings: IntegrationSettings | None = None,
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -397,8 +400,10 @@ def plan_global(
         Seed of OMPL's random sampling (``None``: OMPL's own).
     max_piece:
         Longest piece steered at once (configuration-space Euclidean length).
-    engine:
-        Integration engine (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
+    engine : str or None
+        The loose form of ``settings.engine`` (kept for one release; pass
+        ``settings=IntegrationSettings(engine=...)`` instead): an integration engine
+        (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
     direct:
         Try the single nilpotent plan first (see the module doc).
     anchor, max_iterations:
@@ -423,9 +428,16 @@ def plan_global(
         The local steering's objective, ``"reach"`` or ``"length"``
         (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
         :func:`~nilpotent.planning.iterative.plan`).
+    settings : IntegrationSettings or None
+        How the true system is integrated, in the steering of every piece and in the
+        final verification (default
+        :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`: adaptive DOP853 at
+        ``rtol = 1e-12``; its ``max_steps`` counts per segment of the controls).
 
     Raises
     ------
+    OptionError
+        A bad option, ``settings`` included (:class:`IntegrationSettings`).
     PlanningError
         Start or goal not admissible, no path, a piece
         that cannot be steered inside the free space even when short, or a
@@ -437,11 +449,12 @@ def plan_global(
     """
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
+    chosen = resolve_settings(settings, PLANNING_SETTINGS, engine=engine)
     with budget.time_budget(time_limit):
         return _plan_global(
             sys, start, goal, tol, world=world, limits=limits,
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
-            max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
+            max_piece=max_piece, settings=chosen, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
             path_clearance=path_clearance, hold_shape=hold_shape, objective=objective)
 
@@ -458,7 +471,7 @@ def _plan_global(
     time_limit: float,
     seed: int | None,
     max_piece: float,
-    engine: str,
+    settings: IntegrationSettings,
     direct: bool,
     anchor: str,
     max_iterations: int,
@@ -472,7 +485,7 @@ def _plan_global(
         raise OptionError(f"tol must be a positive number, got {tol}")
     if not (max_piece > 0 and math.isfinite(max_piece)):
         raise OptionError(f"max_piece must be > 0, got {max_piece}")
-    options: dict[str, Any] = {"engine": engine, "anchor": anchor,
+    options: dict[str, Any] = {"settings": settings, "anchor": anchor,
                                "max_iterations": max_iterations, "objective": objective}
     checker = Checker(sys, world, limits, singular_margin, clearance)
     assert checker.limits is not None
@@ -493,7 +506,7 @@ def _plan_global(
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
-        v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
+        v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, settings)
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "
@@ -608,6 +621,6 @@ def _plan_global(
         prev = w
         used.append(w)
         last = p
-        report_progress(len(pieces), len(pieces) + len(targets), "pieces steered")
+        report_progress(ProgressEvent("pieces steered", len(pieces), len(pieces) + len(targets)))
     assert last is not None
     return finish(segments, iterations, used, pieces, "global", planner_s, last)
