@@ -11,9 +11,12 @@ run it on the tree before and on the tree after, then compare::
 ``run`` executes every command of :data:`COMMANDS` (``python -m nilpotent ... --json
 --quiet``, each in its own process, with a time limit) and writes one file per command,
 ``<name>.json``: the exit status, the JSON printed on stdout (or the text, when it is
-not JSON) and, on a non-zero exit, the last line of stderr (the error message).  The
-commands use modest sizes (a few seconds each), so the whole run takes a few minutes
-on a loaded two-core machine.  Cases come from the published/hostile cases directory
+not JSON) and, on a non-zero exit, the last line of stderr (the error message).  Every
+run uses its own fresh code cache (``NILPOTENT_CACHE``, a temporary folder removed at the
+end): the engine that ``"auto"`` picks for a plan depends on whether compiled kernels are
+already on disk, so a shared cache that other processes fill would make two runs of one
+tree differ.  The commands use modest sizes (a few seconds each), so the whole run takes
+a few minutes on a loaded two-core machine.  Cases come from the published/hostile cases directory
 (``--cases``, default ``/work/shared/cases``) and from the built-in models.
 
 ``compare`` prints, per command, ``same`` or the JSON paths whose values differ, after
@@ -28,8 +31,10 @@ import argparse
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -132,12 +137,13 @@ COMMANDS: list[tuple[str, list[str]]] = [
 ]
 
 
-def _run_one(args: list[str], timeout: float) -> dict[str, Any]:
+def _run_one(args: list[str], timeout: float, cache: str) -> dict[str, Any]:
     cmd = [sys.executable, "-m", "nilpotent", *args, "--json", "--quiet"]
     start = time.monotonic()
     try:
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
-                              env=dict(os.environ, COLUMNS="100"), check=False)
+                              env=dict(os.environ, COLUMNS="100", NILPOTENT_CACHE=cache),
+                              check=False)
     except subprocess.TimeoutExpired:
         return {"args": args, "exit": "timeout", "seconds": timeout}
     record: dict[str, Any] = {"args": args, "exit": done.returncode,
@@ -155,11 +161,19 @@ def _run_one(args: list[str], timeout: float) -> dict[str, Any]:
 def run(out: Path, cases: Path, timeout: float, only: list[str]) -> None:
     """Run the commands and write ``out/<name>.json``."""
     out.mkdir(parents=True, exist_ok=True)
+    cache = tempfile.mkdtemp(prefix="nilpotent-snapshot-cache-")
+    try:
+        _run_all(out, cases, timeout, only, cache)
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+
+
+def _run_all(out: Path, cases: Path, timeout: float, only: list[str], cache: str) -> None:
     for name, args in COMMANDS:
         if only and not any(word in name for word in only):
             continue
         full = [a.replace("{cases}", str(cases)) for a in args]
-        record = _run_one(full, timeout)
+        record = _run_one(full, timeout, cache)
         record["args"] = args  # the cases directory is not part of the snapshot
         (out / f"{name}.json").write_text(json.dumps(record, indent=1, sort_keys=True) + "\n")
         print(f"{name}: exit {record['exit']} in {record.get('seconds')} s", file=sys.stderr)
