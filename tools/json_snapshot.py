@@ -28,6 +28,7 @@ byte-identical output); ``--rtol`` relaxes that for a second look.
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import json
 import math
 import os
@@ -173,7 +174,7 @@ def run(out: Path, cases: Path, timeout: float, only: list[str]) -> None:
 
 def _run_all(out: Path, cases: Path, timeout: float, only: list[str], cache: str) -> None:
     for name, args in COMMANDS:
-        if only and not any(word in name for word in only):
+        if only and not any(fnmatch.fnmatchcase(name, pattern) for pattern in only):
             continue
         full = [a.replace("{cases}", str(cases)) for a in args]
         record = _run_one(full, timeout, cache)
@@ -255,7 +256,8 @@ def main(argv: list[str] | None = None) -> int:
     p_run.add_argument("out", type=Path)
     p_run.add_argument("--cases", type=Path, default=Path("/work/shared/cases"))
     p_run.add_argument("--timeout", type=float, default=120.0)
-    p_run.add_argument("--only", nargs="*", default=[], help="names containing these words")
+    p_run.add_argument("--only", nargs="*", default=[],
+                       help="only the commands whose names match these patterns ('plan-*')")
     p_cmp = sub.add_parser("compare", help="compare two snapshot directories")
     p_cmp.add_argument("before", type=Path)
     p_cmp.add_argument("after", type=Path)
