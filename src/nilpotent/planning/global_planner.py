@@ -53,6 +53,7 @@ from nilpotent.errors import (
     PlanningError,
     SingularPointError,
 )
+from nilpotent.numeric.settings import IntegrationSettings, resolve_settings
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
@@ -60,10 +61,11 @@ from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
 from nilpotent.planning.ocp import Refinement, check_refine, refine_route
-from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.timing import TimedTrajectory, input_bounds, motion_fields, retime
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
+from nilpotent.progress import ProgressEvent
 from nilpotent.progress import report as report_progress
 from nilpotent.strict_json import json_safe
 
@@ -362,7 +364,7 @@ def steer_admissible(
     # every sample is admissible, only the cover of the motion between samples (margins
     # of half a step) failed: sample more densely (smaller steps, smaller margins)
     _, dense = simulate_path(system, x, list(p.segments), DENSE_CHECK_POINTS,
-                             options.get("engine", "auto"))
+                             options.get("settings", PLANNING_SETTINGS))
     if not checker.valid_motion(dense):
         return None
     return p
@@ -380,7 +382,7 @@ def plan_global(
     time_limit: float = 60.0,
     seed: int | None = 0,
     max_piece: float = MAX_PIECE,
-    engine: str = "auto",
+    engine: str | None = None,
     direct: bool = True,
     anchor: str = "auto",
     max_iterations: int = 30,
@@ -392,6 +394,7 @@ def plan_global(
     max_speed: float | Sequence[float] | dict[str, float] | None = None,
     max_accel: float | Sequence[float] | dict[str, float] | None = None,
     trajectory_step: float | None = None,
+    settings: IntegrationSettings | None = None,
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -415,8 +418,10 @@ def plan_global(
         Seed of OMPL's random sampling (``None``: OMPL's own).
     max_piece:
         Longest piece steered at once (configuration-space Euclidean length).
-    engine:
-        Integration engine (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
+    engine : str or None
+        The loose form of ``settings.engine`` (kept for one release; pass
+        ``settings=IntegrationSettings(engine=...)`` instead): an integration engine
+        (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
     direct:
         Try the single nilpotent plan first (see the module doc).
     anchor, max_iterations:
@@ -441,26 +446,33 @@ def plan_global(
         The local steering's objective, ``"reach"`` or ``"length"``
         (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
         :func:`~nilpotent.planning.iterative.plan`).
-    refine:
+    settings : IntegrationSettings or None
+        How the true system is integrated, in the steering of every piece and in the
+        final verification (default
+        :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`: adaptive DOP853 at
+        ``rtol = 1e-12``; its ``max_steps`` counts per segment of the controls).
+    refine : str
         ``"none"`` (default) or ``"ocp"``: the plan found is refined by direct optimal
         control of the true system, minimising its length under the limits
         (:func:`nilpotent.planning.ocp.refine_segments`; needs the ``ocp`` extra; the
         obstacles are not constraints of that problem), and the refined controls are
         kept only if they verify and are shorter (:attr:`GlobalPlan.refinement` says
         what happened).
-    max_speed, max_accel:
+    max_speed, max_accel : float, sequence of float, dict or None
         Bounds on the inputs of the re-timed motion, ``|ũ_i| ≤ V_i`` and
         ``|dũ_i/dt| ≤ A_i``: a number (every input), ``m`` numbers, or
         ``{"u1": V, ...}`` (a speed bound may leave inputs out: unbounded; an
         acceleration bound must name them all).  Given, the verified plan is
         re-timed by TOPP-RA (:func:`~nilpotent.planning.timing.retime`) into
         :attr:`GlobalPlan.timed`; ``max_speed`` needs ``max_accel``.
-    trajectory_step:
+    trajectory_step : float or None
         Largest time between the samples of the re-timed motion (default: its
         duration / 500).
 
     Raises
     ------
+    OptionError
+        A bad option, ``settings`` included (:class:`IntegrationSettings`).
     PlanningError
         Start or goal not admissible, no path, a piece
         that cannot be steered inside the free space even when short, or a
@@ -475,12 +487,13 @@ def plan_global(
     check_refine(refine)
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
+    chosen = resolve_settings(settings, PLANNING_SETTINGS, engine=engine)
     bounds = input_bounds(sys.m, max_speed, max_accel, step=trajectory_step)
     with budget.time_budget(time_limit):
         result = _plan_global(
             sys, start, goal, tol, world=world, limits=limits,
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
-            max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
+            max_piece=max_piece, settings=chosen, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
             path_clearance=path_clearance, hold_shape=hold_shape, objective=objective,
             refine=refine)
@@ -488,7 +501,7 @@ def plan_global(
             return result
         p = result.plan
         timed = retime(sys, p.start, p.segments, bounds, step=trajectory_step,
-                       reached=p.reached, engine=engine)
+                       reached=p.reached, settings=chosen)
         return dataclasses.replace(result, timed=timed)
 
 
@@ -504,7 +517,7 @@ def _plan_global(
     time_limit: float,
     seed: int | None,
     max_piece: float,
-    engine: str,
+    settings: IntegrationSettings,
     direct: bool,
     anchor: str,
     max_iterations: int,
@@ -519,7 +532,7 @@ def _plan_global(
         raise OptionError(f"tol must be a positive number, got {tol}")
     if not (max_piece > 0 and math.isfinite(max_piece)):
         raise OptionError(f"max_piece must be > 0, got {max_piece}")
-    options: dict[str, Any] = {"engine": engine, "anchor": anchor,
+    options: dict[str, Any] = {"settings": settings, "anchor": anchor,
                                "max_iterations": max_iterations, "objective": objective}
     checker = Checker(sys, world, limits, singular_margin, clearance)
     assert checker.limits is not None
@@ -540,12 +553,12 @@ def _plan_global(
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
-        refinement = refine_route(refine, checker, x0, xg, segments, tol, engine)
+        refinement = refine_route(refine, checker, x0, xg, segments, tol, settings)
         v = None
         if refinement is not None and refinement[1].applied:
             segments, v = refinement[0], refinement[1].verification  # verified as below
         if v is None:
-            v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
+            v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, settings)
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "
@@ -660,6 +673,6 @@ def _plan_global(
         prev = w
         used.append(w)
         last = p
-        report_progress(len(pieces), len(pieces) + len(targets), "pieces steered")
+        report_progress(ProgressEvent("pieces steered", len(pieces), len(pieces) + len(targets)))
     assert last is not None
     return finish(segments, iterations, used, pieces, "global", planner_s, last)
