@@ -36,11 +36,12 @@ from nilpotent.planning import plan
 from nilpotent.planning.controls import InputSignal, Segment
 from nilpotent.planning.local_model import BUILDERS, choose_builder
 from nilpotent.planning.nilpotent import steer_nilpotent
-from nilpotent.planning.simulation import simulate_candidates
+from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_candidates
 
 TOL = 1e-8
 #: The compiled integrator for every method (the warm-up plan compiles it).
 ENGINE = "numba"
+SETTINGS = PLANNING_SETTINGS.replace(engine=ENGINE)
 DEFAULT_MODELS = (
     "trident-snake",
     "trident-snake-paper",
@@ -74,7 +75,7 @@ def shooting(system, x0: np.ndarray, goal: np.ndarray, k: int, rng) -> tuple[boo
         return [Segment(1.0, 2 * np.pi, tuple(inputs))]
 
     def residual(theta: np.ndarray) -> np.ndarray:
-        end = simulate_candidates(system, x0, [segments(theta)], ENGINE)[0]
+        end = simulate_candidates(system, x0, [segments(theta)], SETTINGS)[0]
         return np.nan_to_num(end - goal, nan=1e3)
 
     t = time.perf_counter()
@@ -92,12 +93,12 @@ def run_model(name: str, goals: int, seed: int, shooting_goals: int) -> dict:
     rng = np.random.default_rng(seed)
     targets = sample_goals(start_model, goals, rng)
     # warm-up: compile and cache kernels, symbolic approximation at the start
-    plan(system, system.origin(), targets[0], TOL, raise_on_failure=False, engine=ENGINE)
+    plan(system, system.origin(), targets[0], TOL, raise_on_failure=False, settings=SETTINGS)
     ok, iters, times, single_err = 0, [], [], []
     for g in targets:
         t = time.perf_counter()
         try:
-            p = plan(system, system.origin(), g, TOL, raise_on_failure=False, engine=ENGINE)
+            p = plan(system, system.origin(), g, TOL, raise_on_failure=False, settings=SETTINGS)
         except NilpotentError:
             times.append(time.perf_counter() - t)
             continue
@@ -107,7 +108,7 @@ def run_model(name: str, goals: int, seed: int, shooting_goals: int) -> dict:
             iters.append(len(p.iterations))
         # baseline: one nilpotent step from the start, not iterated
         st = steer_nilpotent(start_model.nilpotent, np.zeros(system.n), start_model.forward(g))
-        end = simulate_candidates(system, x0, [list(st.segments)], ENGINE)[0]
+        end = simulate_candidates(system, x0, [list(st.segments)], SETTINGS)[0]
         single_err.append(float(np.linalg.norm(end - g)))
     k = start_model.nilpotent.step + 1
     shoot_ok, shoot_t = 0, []

@@ -84,6 +84,10 @@ def run_cli(capsys):
     return _run
 
 
+#: The progress events of the suite's one quick reproduction (``quick_reproduction``).
+REPRODUCTION_EVENTS: list = []
+
+
 @pytest.fixture(scope="session")
 def quick_reproduction(tmp_path_factory):
     """One quick ``reproduce`` (the costliest computation of the suite, shared by
@@ -108,7 +112,8 @@ def quick_reproduction(tmp_path_factory):
     real = pipeline.reproduce
 
     def recording(*args, **kwargs):
-        calls.append(real(*args, **kwargs))
+        assert kwargs.get("progress") is None  # the command reports through its bar
+        calls.append(real(*args, **kwargs, progress=REPRODUCTION_EVENTS.append))
         return calls[-1]
 
     stdout = io.StringIO()
@@ -117,3 +122,9 @@ def quick_reproduction(tmp_path_factory):
         status = main(["reproduce", "--out", str(target), "--quick", "--json", "--quiet"])
     assert len(calls) == 1, (status, stdout.getvalue())
     return status, stdout.getvalue(), marker, calls[0]
+
+
+@pytest.fixture(scope="session")
+def reproduction_events(quick_reproduction) -> list:
+    """The progress events the quick reproduction sent to its ``progress=`` callback."""
+    return REPRODUCTION_EVENTS

@@ -301,3 +301,93 @@ def test_the_graph_checks_see_a_cycle_and_a_private_import(tmp_path: Path):
     graph, private = _import_graph(pkg)
     assert _cycles(graph) == [["nilpotent.a", "nilpotent.b"]]  # b -> c is type-only
     assert len(private) == 2
+
+
+#: Private names of other libraries' APIs and protocols that may be read on their
+#: objects: sympy's ``Add._from_args``/``Mul._from_args`` (building without
+#: re-canonicalising), its ``_sympy_`` conversion protocol and ``Float._prec``;
+#: ``sys._getframe``/``sys._current_frames``; IPython's display protocol
+#: (``_repr_*_``) and namedtuple's public ``_asdict``/``_replace``/``_fields``/``_make``.
+FOREIGN_PRIVATE = frozenset({
+    "_from_args", "_sympy_", "_prec", "_getframe", "_current_frames", "_repr_html_",
+    "_repr_latex_", "_repr_png_", "_repr_svg_", "_repr_mimebundle_", "_asdict", "_replace",
+    "_fields", "_make",
+})
+
+
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
+
+
+def _own_private(cls: ast.ClassDef) -> set[str]:
+    """The private attributes a class defines: in its body, or on ``self``/``cls`` in its
+    methods (``self._x = ...``, ``object.__setattr__(self, "_x", ...)``)."""
+    names: set[str] = set()
+    for node in cls.body:
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
+            names.add(node.name)
+        targets = (node.targets if isinstance(node, ast.Assign)
+                   else [node.target] if isinstance(node, ast.AnnAssign) else [])
+        names.update(t.id for t in targets if isinstance(t, ast.Name))
+    for node in ast.walk(cls):
+        if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
+                and node.value.id in ("self", "cls") and isinstance(node.ctx, ast.Store)):
+            names.add(node.attr)
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                and node.func.attr == "__setattr__" and len(node.args) >= 2
+                and isinstance(node.args[1], ast.Constant) and isinstance(node.args[1].value, str)):
+            names.add(node.args[1].value)
+    return {n for n in names if _is_private(n)}
+
+
+def _private_reaches(root: Path = PACKAGE) -> list[str]:
+    """Reads or writes of ``obj._name`` (``obj`` not ``self``/``cls``) that reach into
+    another's private attribute: one no class of the module defines, or a cache (a name
+    with ``cache`` or ``memo``) outside the methods of the class that owns it."""
+    found: list[str] = []
+    for path in sorted(root.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        classes = [c for c in ast.walk(tree) if isinstance(c, ast.ClassDef)]
+        module_own = set().union(*(_own_private(c) for c in classes)) if classes else set()
+        inside: dict[int, set[str]] = {}  # node id -> private names of its enclosing class
+        for cls in classes:
+            own = _own_private(cls)
+            for node in ast.walk(cls):
+                inside[id(node)] = own
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.Attribute) and _is_private(node.attr)):
+                continue
+            if isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"):
+                continue
+            if node.attr in FOREIGN_PRIVATE:
+                continue
+            where = f"{path.relative_to(root.parent)} line {node.lineno}: {ast.unparse(node)}"
+            if node.attr not in module_own:
+                found.append(f"{where} (defined in another module)")
+            elif ("cache" in node.attr or "memo" in node.attr) and (
+                    node.attr not in inside.get(id(node), set())):
+                found.append(f"{where} (a cache used outside the class that owns it)")
+    return found
+
+
+def test_no_module_reaches_into_another_objects_private_attributes():
+    """``obj._x`` only for what the module itself defines, and a cache only inside the
+    class that owns it (the owner gives a public way instead)."""
+    assert _private_reaches() == []
+
+
+def test_the_private_attribute_check_sees_a_reach(tmp_path: Path):
+    pkg = tmp_path / "nilpotent"
+    pkg.mkdir()
+    (pkg / "a.py").write_text(
+        "class A:\n    def __init__(self):\n        self._cache = {}\n        self._n = 1\n"
+        "    def same(self, other):\n        return other._cache, other._n\n"
+        "def seed(a):\n    a._cache[1] = 2\n    return a._n\n")
+    (pkg / "b.py").write_text("def peek(a):\n    return a._cache, a._n, a.__class__\n")
+    found = _private_reaches(pkg)
+    # a method reading another A's cache is the owner; a function of the module writing
+    # it is not; another module reads neither the cache nor a plain private attribute
+    assert [f.split(": ")[1].split(" (")[0] for f in found] == [
+        "a._cache", "a._cache", "a._n"], found
+    assert [f.split(": ")[0] for f in found] == [
+        "nilpotent/a.py line 8", "nilpotent/b.py line 2", "nilpotent/b.py line 2"]

@@ -124,10 +124,10 @@ def test_report_updates_the_innermost_task(reports_on, monkeypatch):
     monkeypatch.setattr(progress, "PLAIN_INTERVAL", 0.0)
     out = io.StringIO()
     with progress.progress("plan", stream=out) as bar:
-        progress.report(2, 5, "pieces steered")
+        progress.report(progress.ProgressEvent("pieces steered", 2, 5))
         assert (bar.completed, bar.total) == (2, 5)
     assert "pieces steered" in out.getvalue()
-    progress.report(1, 2)  # no task: nothing happens
+    progress.report(progress.ProgressEvent("plan", 1, 2))  # no task: nothing happens
 
 
 def test_progress_goes_to_stderr_and_quiet_silences_it(run_cli, monkeypatch):

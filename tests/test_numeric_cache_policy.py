@@ -70,6 +70,7 @@ _PLANT = textwrap.dedent("""\
     import heyoka as hy
     from nilpotent.numeric import bracket_inputs, compile_fields, integrate
     from nilpotent.numeric.engines import heyoka_engine
+    from nilpotent.numeric.engines.base import compiled_memo
     heyoka_engine.use_safe_disk_cache = lambda module: None  # heyoka's own default
     x, y, t = sp.symbols("x y t")
     def run(c):
@@ -77,7 +78,7 @@ _PLANT = textwrap.dedent("""\
                            name="planted")
         sol = integrate(s, np.zeros((1, 3)), bracket_inputs(2, 1, 2, [0.3]),
                         engine="heyoka", rtol=1e-12, atol=1e-12)
-        s._memo.clear()
+        compiled_memo(s).clear()
         return sol.final[0].tolist()
     default = Path(str(hy.llvm_state.get_diskcache_path()))
     genuine = run(0.25)

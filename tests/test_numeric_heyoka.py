@@ -17,6 +17,7 @@ from nilpotent.numeric import (
     integrate,
 )
 from nilpotent.numeric.engines import heyoka_engine
+from nilpotent.numeric.engines.base import compiled_memo
 
 pytest.importorskip("heyoka")
 
@@ -212,7 +213,7 @@ def test_a_coordinate_the_inputs_cannot_move_is_held_not_integrated(snake):
     np.testing.assert_array_equal(sol.final[:, 2], x0[:, 2])
     np.testing.assert_array_equal(sol.samples[:, :, 2], np.repeat(x0[:, 2:3], 3, axis=1))
     tol = heyoka_engine.heyoka_tolerance(1e-10, 1e-12)
-    held = [v for k, v in snake._memo.items() if k[0] == "heyoka" and k[4]]
+    held = [v for k, v in compiled_memo(snake).items() if k[0] == "heyoka" and k[4]]
     assert held and all(v.frozen == (2,) for v in held)
     assert all(v.template.state.shape[0] == 5 for v in held)
     full = heyoka_engine.taylor_integrator(snake, sig.harmonics, tol, None)
@@ -255,7 +256,7 @@ def test_the_integrator_reads_only_the_parameters_in_use(snake):
     integrate(snake, np.zeros((1, 6)), sig, engine="heyoka")
     pars = heyoka_engine._parameters(sig)[0, 0]
     used = tuple(int(p) for p in np.flatnonzero(pars))
-    integ = [v for k, v in snake._memo.items()
+    integ = [v for k, v in compiled_memo(snake).items()
              if k[0] == "heyoka" and k[3] is not None and v.slots == used]
     assert integ and integ[0].frozen == () and integ[0].parameters == len(used)
 

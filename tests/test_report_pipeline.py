@@ -87,3 +87,16 @@ def test_cli_replaces_a_previous_reproduction(replaced, run_cli, tmp_path: Path)
     assert not marker.exists()
     leftovers = [p.name for p in target.parent.iterdir() if p.name.startswith(".")]
     assert leftovers == []
+
+
+def test_the_steps_are_reported_as_progress_events(result, reproduction_events) -> None:
+    """``reproduce(progress=...)`` receives one ProgressEvent per step, in order, before
+    it runs (the step's name, the steps done, their number), then ``"done"``."""
+    from nilpotent.progress import ProgressEvent
+
+    steps = list(result.timings)  # the named steps, in the order they ran
+    n = len(steps)
+    assert n > 1
+    expected = [*(ProgressEvent(name, k, n) for k, name in enumerate(steps)),
+                ProgressEvent("done", n, n)]
+    assert reproduction_events == expected

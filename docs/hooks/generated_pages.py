@@ -147,7 +147,12 @@ API_SUPPORTING: dict[str, tuple[str, ...]] = {
         "nilpotent.viz.simulation.plot_comparison",
         "nilpotent.viz.simulation.plot_scaling_study",
     ),
-    "sweeps": ("nilpotent.viz.simulation.plot_sweep", "nilpotent.simulation.sweep.SWEEP_SETTINGS"),
+    "sweeps": (
+        "nilpotent.viz.simulation.plot_sweep",
+        "nilpotent.simulation.sweep.SWEEP_SETTINGS",
+        "nilpotent.progress.ProgressEvent",
+        "nilpotent.progress.ProgressCallback",
+    ),
     "planning": (
         "nilpotent.planning.nilpotent.METHODS",
         "nilpotent.planning.simulation.PLANNING_SETTINGS",

@@ -1,7 +1,15 @@
 """Progress of long work, reported on stderr.
 
-One mechanism for every long computation of the library (exact rank decisions,
-approximations, simulations, sweeps, the paper reproduction):
+One protocol for every long computation of the library (exact rank decisions,
+approximations, simulations, sweeps, plans, the paper audit and reproduction): a
+computation that reports how far it is sends :class:`ProgressEvent` values
+``(stage, done, total, detail)`` to a :class:`ProgressCallback` (any callable taking
+one event).  A library function that takes ``progress=`` calls it with events; the
+bar on stderr, :class:`Progress`, is one such callback (``progress=bar``), and
+:func:`report` sends an event to the innermost bar now shown (for code deep in a
+long step that does not own it).
+
+The bar:
 
 - on a terminal, a rich progress bar on stderr;
 - on a pipe or a file (CI, ``2> log``), plain lines ``nilpotent: <what>: <done>/<total>``,
@@ -18,12 +26,18 @@ approximations, simulations, sweeps, the paper reproduction):
 
 Usage::
 
-    from nilpotent.progress import progress
+    from nilpotent.progress import ProgressEvent, progress
 
     with progress("brackets of length 4", total=len(words)) as bar:
         for word in words:
             ...
             bar.advance()
+
+    with progress("bracket motions") as bar:      # the bar as a callback
+        result = sweep(system, (1, 2), progress=bar)
+
+    def log(event: ProgressEvent) -> None:        # or any callable of one event
+        print(event.stage, event.done, event.total, event.detail)
 
 stdout is never written: ``--json`` output stays clean.
 """
@@ -36,7 +50,7 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import TextIO
+from typing import Protocol, TextIO
 
 from nilpotent import interrupts
 
@@ -68,6 +82,39 @@ def enabled() -> bool:
     return _state["enabled"]
 
 
+@dataclass(frozen=True)
+class ProgressEvent:
+    """How far a long computation is: the one value every progress report carries.
+
+    Parameters
+    ----------
+    stage : str
+        The named stage now running, in a few words (``"bracket motions"``, a step of
+        the reproduction such as ``"audit of the paper"``, ``"pieces steered"``).
+    done : int
+        Units of work done so far (``>= 0``).
+    total : int or None
+        Units of work in all, where known (it may become known later, or grow).
+    detail : str
+        A short extra text (empty: none).
+    """
+
+    stage: str
+    done: int
+    total: int | None = None
+    detail: str = ""
+
+
+class ProgressCallback(Protocol):
+    """What ``progress=`` takes: called with one :class:`ProgressEvent` per report.
+
+    :class:`Progress` (the bar on stderr) is one; so is any function of one event.
+    """
+
+    def __call__(self, event: ProgressEvent, /) -> None:
+        """Take one report."""
+
+
 def _plain_text(text: str, limit: int = 200) -> str:
     """``text`` with control characters removed and its length bounded (user text is printed)."""
     clean = "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
@@ -78,7 +125,8 @@ def _plain_text(text: str, limit: int = 200) -> str:
 
 @dataclass
 class Progress:
-    """A running task: call :meth:`advance` or :meth:`update` as work is done."""
+    """A running task shown on stderr: call :meth:`advance` or :meth:`update` as work is
+    done, or pass it where a :class:`ProgressCallback` is taken (it is one)."""
 
     description: str
     total: int | None = None
@@ -90,6 +138,14 @@ class Progress:
     _task: object | None = None
     _start: float = field(default=0.0)
     _emitted: bool = False
+
+    def __call__(self, event: ProgressEvent, /) -> None:
+        """Show ``event``: its counts, and its detail, or its stage when that is not the
+        task's own description (the steps of a reproduction)."""
+        if event.total is not None:
+            self.total = int(event.total)
+        detail = event.detail or (event.stage if event.stage != self.description else "")
+        self.update(event.done, detail or None)
 
     def advance(self, n: int = 1, detail: str | None = None) -> None:
         """Count ``n`` more units of work done (optionally with a short detail text)."""
@@ -214,16 +270,13 @@ def current() -> Progress | None:
     return _tasks[-1] if _tasks else None
 
 
-def report(done: int, total: int | None = None, detail: str | None = None) -> None:
-    """Say how far the innermost running task is (``done`` of ``total`` units): for code
+def report(event: ProgressEvent) -> None:
+    """Send ``event`` to the innermost running task (:meth:`Progress.__call__`): for code
     deep in a long step (pieces of a plan steered) that does not own the task; nothing
     when no task is reported."""
     task = current()
-    if task is None:
-        return
-    if total is not None:
-        task.total = int(total)
-    task.update(done, detail)
+    if task is not None:
+        task(event)
 
 
 @contextmanager

@@ -308,16 +308,11 @@ def sweep_command(
         )
 
     with work("bracket motions", total=motions) as bar:
-
-        def progress(done: int, total: int) -> None:
-            bar.total = total
-            bar.update(done)
-
         result = sweep(
             system, pairs, amps, point=point, samples=samples, radius=radius, seed=seed,
             design=design, vary=varied or None, periods=periods,
             time_samples=time_samples, rtol=rtol, atol=rtol * 1e-2,
-            bound=bound, chunk_size=chunk_size, dask=dask, progress=progress,
+            bound=bound, chunk_size=chunk_size, dask=dask, progress=bar,
             dask_connect_timeout=dask_connect_timeout,
             dask_progress_timeout=dask_progress_timeout,
         )

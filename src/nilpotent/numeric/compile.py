@@ -34,9 +34,8 @@ at least :data:`NUMBA_MIN_BATCH` states, numpy below).
 from __future__ import annotations
 
 import importlib.util
-import weakref
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from types import ModuleType
 from typing import Any
@@ -179,15 +178,6 @@ def _prepare(
     return _Prepared(n, len(fields), tuple(reps), tuple(as_expr(e) for e in reduced))
 
 
-class _Memo(dict):
-    """A system's per-process cache (a ``dict`` that weak references can point to)."""
-
-
-# one memo per key: systems with the same fields (a renamed model, the same fields
-# built twice) share their compiled integrators; it lives as long as one of them
-_MEMOS: weakref.WeakValueDictionary[str, _Memo] = weakref.WeakValueDictionary()
-
-
 @dataclass(frozen=True, eq=False)
 class CompiledSystem:
     """Vectorised numeric form of ``dx/dt = Σ u_i X_i(x)`` (see the module docstring).
@@ -216,13 +206,6 @@ class CompiledSystem:
     fields: tuple[tuple[sp.Expr, ...], ...]
     key: str
     backend: str = "auto"
-    _memo: dict = field(default_factory=_Memo, init=False, repr=False, compare=False)
-
-    def __post_init__(self) -> None:
-        memo = _MEMOS.get(self.key)
-        if memo is None:
-            memo = _MEMOS.setdefault(self.key, _Memo())
-        object.__setattr__(self, "_memo", memo)
 
     def __reduce__(self) -> tuple[Any, ...]:
         # picklable (e.g. for Dask workers): the loaded modules are not sent,

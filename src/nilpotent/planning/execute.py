@@ -45,6 +45,7 @@ import numpy as np
 
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, OptionError, PlanningError
+from nilpotent.numeric.settings import IntegrationSettings, resolve_settings
 from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.global_planner import (
@@ -54,7 +55,7 @@ from nilpotent.planning.global_planner import (
     plan_json,
     steer_admissible,
 )
-from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.verify import Checker, Verification, verify_states
 
 __all__ = ["Execution", "execute_plan", "perturbed_system"]
@@ -193,6 +194,7 @@ def execute_plan(
     tol: float = 1e-3,
     max_corrections: int = 10,
     time_limit: float = 60.0,
+    settings: IntegrationSettings | None = None,
 ) -> Execution:
     """Execute ``glob`` on the perturbed robot with re-planning after each piece (module doc).
 
@@ -212,11 +214,14 @@ def execute_plan(
         Most re-plans toward the goal after the last piece (0 to :data:`MAX_CORRECTIONS`).
     time_limit:
         Seconds for the whole execution (within an enclosing budget, the earlier end).
+    settings : IntegrationSettings or None
+        How the model (re-planning) and the true robot are integrated (default
+        :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`).
 
     Raises
     ------
     OptionError
-        Bad mismatch, noise or number of corrections.
+        Bad mismatch, noise, number of corrections or ``settings``.
     PlanningError
         A re-plan from a measured state fails (model steering and global planner).
     ComputationLimitError
@@ -227,8 +232,9 @@ def execute_plan(
             f"--max-corrections must be between 0 and {MAX_CORRECTIONS}, got {max_corrections}")
     if not time_limit > 0:
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
+    chosen = resolve_settings(settings, PLANNING_SETTINGS)
     with budget.time_budget(time_limit):
-        return _execute(glob, mismatch, noise, seed, tol, max_corrections, time_limit)
+        return _execute(glob, mismatch, noise, seed, tol, max_corrections, time_limit, chosen)
 
 
 def _execute(
@@ -239,6 +245,7 @@ def _execute(
     tol: float,
     max_corrections: int,
     time_limit: float,
+    settings: IntegrationSettings,
 ) -> Execution:
     if not (math.isfinite(noise) and noise >= 0):
         raise OptionError(f"--noise must be >= 0, got {noise}")
@@ -253,7 +260,7 @@ def _execute(
     actual = Checker(true, glob.world, glob.limits, glob.singular_margin, glob.clearance_required)
     x0 = np.array(glob.plan.start)
     goal = np.array(glob.plan.goal)
-    options = {"engine": "auto", "anchor": "auto", "max_iterations": 30}
+    options = {"settings": settings, "anchor": "auto", "max_iterations": 30}
 
     def measure(x: np.ndarray) -> np.ndarray:
         return x + (rng.normal(0.0, noise, x.shape) if noise > 0 else 0.0)
@@ -269,7 +276,7 @@ def _execute(
             )
         g = plan_global(model, x_meas, target, piece_tol, world=glob.world, limits=glob.limits,
                         singular_margin=glob.singular_margin, time_limit=time_limit,
-                        seed=seed, clearance=glob.clearance_required)
+                        seed=seed, clearance=glob.clearance_required, settings=settings)
         return list(g.plan.segments)
 
     x = x0.copy()
@@ -286,7 +293,7 @@ def _execute(
         nonlocal x, x_meas, t_offset, stops
         if not segs:
             return True
-        t, q = simulate_path(true, x, segs, SAMPLES, hard=True)
+        t, q = simulate_path(true, x, segs, SAMPLES, settings, hard=True)
         bad = np.flatnonzero(~actual.valid(q))
         whole = not bad.size
         if not whole:
@@ -324,7 +331,8 @@ def _execute(
             break
         replans += 1
     closed = verify_states(actual, np.concatenate(times), np.vstack(states), goal)
-    t_open, q_open = simulate_path(true, x0, list(glob.plan.segments), SAMPLES, hard=True)
+    t_open, q_open = simulate_path(true, x0, list(glob.plan.segments), SAMPLES, settings,
+                                   hard=True)
     opened = verify_states(actual, t_open, q_open, goal)
     return Execution(
         plan=glob, closed_loop=closed, open_loop=opened,

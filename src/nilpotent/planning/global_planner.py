@@ -53,6 +53,7 @@ from nilpotent.errors import (
     PlanningError,
     SingularPointError,
 )
+from nilpotent.numeric.settings import IntegrationSettings, resolve_settings
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
@@ -60,11 +61,12 @@ from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
 from nilpotent.planning.ocp import Refinement, check_refine, refine_route
-from nilpotent.planning.optimal_planner import PLANNERS, rrtstar_path
-from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.optimal_planner import HolonomicStage, planner_json
+from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.timing import TimedTrajectory, input_bounds, motion_fields, retime
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.planning.world import World
+from nilpotent.progress import ProgressEvent
 from nilpotent.progress import report as report_progress
 from nilpotent.strict_json import json_safe
 
@@ -198,8 +200,6 @@ class GlobalPlan(PlanFigure):
             reasons["clearance"] = "no world given: no obstacles to measure against"
         if v.self_clearance is None:
             reasons["self_clearance"] = f"model {self.plan.system.name} names no body pairs"
-        if self.path_cost is None:
-            reasons["path_cost"] = "the holonomic stage (rrtconnect, or none) has no cost"
         if v.min_singular_margin is None:
             reasons["min_singular_margin"] = f"model {self.plan.system.name} defines no " \
                 "singular margin"
@@ -217,9 +217,7 @@ class GlobalPlan(PlanFigure):
             "clearance_required": self.clearance_required,
             "route": self.route,
             "planner_seconds": self.planner_seconds,
-            "planner": self.planner,
-            "path_cost": self.path_cost,
-            "cost_history": [list(c) for c in self.cost_history],
+            **planner_json(self.planner, self.path_cost, self.cost_history, reasons),
             "seconds": self.seconds,
             "pieces": [
                 {"target": list(p.target), "first_segment": p.first_segment,
@@ -278,8 +276,7 @@ def shape_held_path(
 
     OMPL then samples only the body pose (a lower-dimensional, easier query), and the
     steered pieces need no shape correction on the way: only the last piece does.
-    ``path_fn``: the OMPL stage (:func:`ompl_path`, or one with its signature);
-    ``chord``: a free straight chord to the goal's pose is the path (no OMPL).
+    ``path_fn``: the OMPL stage (signature of :func:`ompl_path`); ``chord``: take a free chord.
 
     Raises
     ------
@@ -378,7 +375,7 @@ def steer_admissible(
     # every sample is admissible, only the cover of the motion between samples (margins
     # of half a step) failed: sample more densely (smaller steps, smaller margins)
     _, dense = simulate_path(system, x, list(p.segments), DENSE_CHECK_POINTS,
-                             options.get("engine", "auto"))
+                             options.get("settings", PLANNING_SETTINGS))
     if not checker.valid_motion(dense):
         return None
     return p
@@ -396,7 +393,7 @@ def plan_global(
     time_limit: float = 60.0,
     seed: int | None = 0,
     max_piece: float = MAX_PIECE,
-    engine: str = "auto",
+    engine: str | None = None,
     direct: bool = True,
     anchor: str = "auto",
     max_iterations: int = 30,
@@ -408,6 +405,7 @@ def plan_global(
     max_speed: float | Sequence[float] | dict[str, float] | None = None,
     max_accel: float | Sequence[float] | dict[str, float] | None = None,
     trajectory_step: float | None = None,
+    settings: IntegrationSettings | None = None,
     planner: str = "rrtconnect",
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
@@ -432,8 +430,10 @@ def plan_global(
         Seed of OMPL's random sampling (``None``: OMPL's own).
     max_piece:
         Longest piece steered at once (configuration-space Euclidean length).
-    engine:
-        Integration engine (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
+    engine : str or None
+        The loose form of ``settings.engine`` (kept for one release; pass
+        ``settings=IntegrationSettings(engine=...)`` instead): an integration engine
+        (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
     direct:
         Try the single nilpotent plan first (see the module doc).
     anchor, max_iterations:
@@ -458,30 +458,35 @@ def plan_global(
         The local steering's objective, ``"reach"`` or ``"length"``
         (:data:`nilpotent.planning.length.OBJECTIVES`; passed to
         :func:`~nilpotent.planning.iterative.plan`).
-    refine:
+    settings : IntegrationSettings or None
+        How the true system is integrated, in the steering of every piece and in the
+        final verification (default
+        :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`: adaptive DOP853 at
+        ``rtol = 1e-12``; its ``max_steps`` counts per segment of the controls).
+    refine : str
         ``"none"`` (default) or ``"ocp"``: the plan found is refined by direct optimal
         control of the true system, minimising its length under the limits
         (:func:`nilpotent.planning.ocp.refine_segments`; needs the ``ocp`` extra; the
         obstacles are not constraints of that problem), and the refined controls are
         kept only if they verify and are shorter (:attr:`GlobalPlan.refinement` says
         what happened).
-    max_speed, max_accel:
+    max_speed, max_accel : float, sequence of float, dict or None
         Bounds on the inputs of the re-timed motion, ``|ũ_i| ≤ V_i`` and
         ``|dũ_i/dt| ≤ A_i``: a number (every input), ``m`` numbers, or
         ``{"u1": V, ...}`` (a speed bound may leave inputs out: unbounded; an
         acceleration bound must name them all).  Given, the verified plan is
         re-timed by TOPP-RA (:func:`~nilpotent.planning.timing.retime`) into
         :attr:`GlobalPlan.timed`; ``max_speed`` needs ``max_accel``.
-    trajectory_step:
+    trajectory_step : float or None
         Largest time between the samples of the re-timed motion (default: its
         duration / 500).
     planner:
-        The holonomic stage: ``"rrtconnect"`` (OMPL RRTConnect; a free straight chord is
-        taken as is) or ``"rrtstar"`` (OMPL RRT* under the ball–box cost, anytime:
-        :mod:`nilpotent.planning.optimal_planner`).
+        ``"rrtconnect"`` or ``"rrtstar"`` (:mod:`nilpotent.planning.optimal_planner`).
 
     Raises
     ------
+    OptionError
+        A bad option, ``settings`` included (:class:`IntegrationSettings`).
     PlanningError
         Start or goal not admissible, no path, a piece
         that cannot be steered inside the free space even when short, or a
@@ -496,12 +501,13 @@ def plan_global(
     check_refine(refine)
     if not (time_limit > 0 and math.isfinite(time_limit)):
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
+    chosen = resolve_settings(settings, PLANNING_SETTINGS, engine=engine)
     bounds = input_bounds(sys.m, max_speed, max_accel, step=trajectory_step)
     with budget.time_budget(time_limit):
         result = _plan_global(
             sys, start, goal, tol, world=world, limits=limits,
             singular_margin=singular_margin, time_limit=time_limit, seed=seed,
-            max_piece=max_piece, engine=engine, direct=direct, anchor=anchor,
+            max_piece=max_piece, settings=chosen, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
             path_clearance=path_clearance, hold_shape=hold_shape, objective=objective,
             refine=refine, planner=planner)
@@ -509,7 +515,7 @@ def plan_global(
             return result
         p = result.plan
         timed = retime(sys, p.start, p.segments, bounds, step=trajectory_step,
-                       reached=p.reached, engine=engine)
+                       reached=p.reached, settings=chosen)
         return dataclasses.replace(result, timed=timed)
 
 
@@ -525,7 +531,7 @@ def _plan_global(
     time_limit: float,
     seed: int | None,
     max_piece: float,
-    engine: str,
+    settings: IntegrationSettings,
     direct: bool,
     anchor: str,
     max_iterations: int,
@@ -537,13 +543,11 @@ def _plan_global(
     planner: str = "rrtconnect",
 ) -> GlobalPlan:
     t0 = time.perf_counter()
-    if planner not in PLANNERS:
-        raise OptionError(f"unknown planner {planner!r} (choose from {', '.join(PLANNERS)})")
     if not (tol > 0 and math.isfinite(tol)):
         raise OptionError(f"tol must be a positive number, got {tol}")
     if not (max_piece > 0 and math.isfinite(max_piece)):
         raise OptionError(f"max_piece must be > 0, got {max_piece}")
-    options: dict[str, Any] = {"engine": engine, "anchor": anchor,
+    options: dict[str, Any] = {"settings": settings, "anchor": anchor,
                                "max_iterations": max_iterations, "objective": objective}
     checker = Checker(sys, world, limits, singular_margin, clearance)
     assert checker.limits is not None
@@ -562,16 +566,16 @@ def _plan_global(
             "raise --max-piece or plan to a nearer goal"
         )
 
-    found: list[Any] = []  # rrtstar: its OptimalPath
+    stage = HolonomicStage(planner, max_piece)  # the OMPL stage (path and its cost)
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
-        refinement = refine_route(refine, checker, x0, xg, segments, tol, engine)
+        refinement = refine_route(refine, checker, x0, xg, segments, tol, settings)
         v = None
         if refinement is not None and refinement[1].applied:
             segments, v = refinement[0], refinement[1].verification  # verified as below
         if v is None:
-            v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, engine)
+            v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, settings)
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "
@@ -587,14 +591,13 @@ def _plan_global(
             reached=v.reached, error=v.error, iterations=tuple(iterations),
             trajectory=Trajectory(v.times, v.states), tol=tol, anchor=last.anchor,
             builder=last.builder, initial_error=float(np.linalg.norm(xg - x0)),
-            seconds=time.perf_counter() - t0,
+            seconds=time.perf_counter() - t0, objective=objective,
         )
         return GlobalPlan(whole, world, checker.limits, singular_margin,  # type: ignore[arg-type]
                           tuple(tuple(float(c) for c in w) for w in waypoints), tuple(pieces),
                           v, route, planner_s, time_limit, time.perf_counter() - t0,
                           checker.clearance, None if refinement is None else refinement[1],
-                          planner=planner, path_cost=found[-1].cost if found else None,
-                          cost_history=found[-1].cost_history if found else ())
+                          **stage.fields())
 
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
@@ -609,9 +612,6 @@ def _plan_global(
                 pass
     # 2. a path in configuration space, with room around it where possible
     planner_s = 0.0
-
-    path_fn = ompl_path if planner == "rrtconnect" else rrtstar_path(found, max_piece)
-
     path_valid = checker.valid
     if world is not None and path_clearance > 0:
         path_valid = _roomy(checker, x0, xg, path_clearance, PATH_END_ZONE)
@@ -627,13 +627,13 @@ def _plan_global(
             seconds = max(0.1, 0.25 * budget.seconds_left())
             try:
                 path = shape_held_path(checker, x0, xg, seconds, seed, path_valid, held,
-                                       path_fn, chord=planner == "rrtconnect")
+                                       stage.path, chord=planner == "rrtconnect")
             except PlanningError:
                 path = None
         if path is None:
             budget.check("looking for a path with OMPL")
             seconds = max(0.1, 0.5 * budget.seconds_left())
-            path = path_fn(checker, x0, xg, seconds, seed, valid=path_valid)
+            path = stage.path(checker, x0, xg, seconds, seed, valid=path_valid)
         planner_s = time.perf_counter() - t_ompl
     pieces_needed = sum(math.ceil(float(np.linalg.norm(b - a)) / max_piece)
                         for a, b in itertools.pairwise(path))
@@ -692,6 +692,6 @@ def _plan_global(
         prev = w
         used.append(w)
         last = p
-        report_progress(len(pieces), len(pieces) + len(targets), "pieces steered")
+        report_progress(ProgressEvent("pieces steered", len(pieces), len(pieces) + len(targets)))
     assert last is not None
     return finish(segments, iterations, used, pieces, "global", planner_s, last)

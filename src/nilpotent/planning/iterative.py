@@ -38,6 +38,7 @@ import numpy as np
 
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import NilpotentError, OptionError, PlanningError, SingularPointError
+from nilpotent.numeric.settings import IntegrationSettings, resolve_settings
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
 from nilpotent.planning.controls import (
@@ -49,7 +50,12 @@ from nilpotent.planning.controls import (
 from nilpotent.planning.length import length_report, method_for
 from nilpotent.planning.local_model import BUILDERS, LocalModel, check_regular, choose_builder
 from nilpotent.planning.nilpotent import StepTooHighError, steer_nilpotent
-from nilpotent.planning.simulation import simulate_candidates, simulate_plan, single_engine
+from nilpotent.planning.simulation import (
+    PLANNING_SETTINGS,
+    simulate_candidates,
+    simulate_plan,
+    single_engine,
+)
 from nilpotent.simulation.trajectory import Trajectory
 from nilpotent.strict_json import json_object
 
@@ -145,6 +151,8 @@ class Plan(PlanFigure):
         ``‖start − goal‖``.
     seconds:
         Wall-clock time of the planning.
+    objective:
+        The local steering's objective (``"reach"`` or ``"length"``).
     """
 
     system: ControlSystem
@@ -160,6 +168,7 @@ class Plan(PlanFigure):
     builder: str = "numeric"
     initial_error: float = 0.0
     seconds: float = 0.0
+    objective: str = "reach"
     converged: bool = field(init=False)
 
     def __post_init__(self) -> None:
@@ -219,7 +228,7 @@ class Plan(PlanFigure):
     def length_fields(self) -> tuple[dict[str, Any], dict[str, str]]:
         """``length`` (``∫‖u‖ dt``), ``lower_bound``, ``lower_bound_kind``, ``length_ratio``
         and the reasons for the null ones (:func:`nilpotent.planning.length.length_report`)."""
-        return length_report(self.system, self.start, self.goal, self.segments)
+        return length_report(self.system, self.start, self.goal, self.segments, self.objective)
 
     @property
     def length(self) -> float:
@@ -295,7 +304,7 @@ def _iterate(
     tol: float,
     max_iterations: int,
     method: str,
-    engine: str,
+    settings: IntegrationSettings,
     handover: float = 0.0,
     guess: list[Segment] | None = None,
 ) -> tuple[list[Segment], np.ndarray, float, list[Iteration], str]:
@@ -333,12 +342,12 @@ def _iterate(
         if not trials:
             return segments, x, error, history, "the nilpotent system could not be steered"
         # the full step first; the damped ones (one batch) only if it makes no progress
-        ends = simulate_candidates(system, x, [trials[0][1]], engine)
+        ends = simulate_candidates(system, x, [trials[0][1]], settings)
         merits = np.array([merit(e) if np.all(np.isfinite(e)) else math.inf for e in ends])
         if not merits[0] < distance:
             trials.extend(candidates)
             if len(trials) > 1:
-                more = simulate_candidates(system, x, [segs for _, segs, _ in trials[1:]], engine)
+                more = simulate_candidates(system, x, [segs for _, segs, _ in trials[1:]], settings)
                 ends = np.vstack([ends, more])
                 merits = np.array(
                     [merit(e) if np.all(np.isfinite(e)) else math.inf for e in ends]
@@ -376,7 +385,7 @@ def _refine(
     segments: list[Segment],
     xg: np.ndarray,
     tol: float,
-    engine: str,
+    settings: IntegrationSettings,
     max_steps: int = REFINE_STEPS,
 ) -> tuple[list[Segment], np.ndarray, float, list[Iteration]]:
     """Shooting refinement: Newton on the true endpoint map over the last step's coefficients.
@@ -393,10 +402,10 @@ def _refine(
     m = system.m
     tail = segments[-2:]
     prefix = segments[: len(segments) - len(tail)]
-    x_before = simulate_candidates(system, x0, [prefix], engine)[0] if prefix else x0
+    x_before = simulate_candidates(system, x0, [prefix], settings)[0] if prefix else x0
     harmonics = [max((i.harmonics for i in seg.inputs), default=0) for seg in tail]
     theta = coefficients(tail, harmonics)
-    end = simulate_candidates(system, x_before, [tail], engine)[0]
+    end = simulate_candidates(system, x_before, [tail], settings)[0]
     error = float(np.linalg.norm(end - xg))
     history: list[Iteration] = []
     for k in range(min(REFINE_STEPS, max_steps)):
@@ -406,14 +415,14 @@ def _refine(
         t_it = time.perf_counter()
         h = FD_STEP * max(1.0, float(np.max(np.abs(theta))))
         probes = [from_coefficients(theta + h * e, tail, harmonics, m) for e in np.eye(theta.size)]
-        ends = simulate_candidates(system, x_before, probes, engine)
+        ends = simulate_candidates(system, x_before, probes, settings)
         jac = (ends - end[None, :]).T / h
         if not np.all(np.isfinite(jac)):
             break
         step, *_ = np.linalg.lstsq(jac, end - xg, rcond=None)
         tries = [theta - a * step for a in (1.0, 0.5, 0.25)]
         tried = simulate_candidates(
-            system, x_before, [from_coefficients(t, tail, harmonics, m) for t in tries], engine
+            system, x_before, [from_coefficients(t, tail, harmonics, m) for t in tries], settings
         )
         errs = np.linalg.norm(tried - xg, axis=1)
         errs[~np.isfinite(errs)] = np.inf
@@ -438,7 +447,8 @@ def plan(
     method: str = "auto",
     raise_on_failure: bool = True,
     trajectory_points: int = 40,
-    engine: str = "auto",
+    settings: IntegrationSettings | None = None,
+    engine: str | None = None,
     refine: bool = True,
     handover: float | None = None,
     time_limit: float = math.inf,
@@ -483,8 +493,13 @@ def plan(
         with ``False`` return the best plan found (``converged`` is False).
     trajectory_points:
         Samples per segment of :attr:`Plan.trajectory`.
-    engine:
-        Integration engine of the true system
+    settings : IntegrationSettings or None
+        How the true system is integrated (default
+        :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`: adaptive DOP853 at
+        ``rtol = 1e-12``; its ``max_steps`` counts per segment of the controls).
+    engine : str or None
+        The loose form of ``settings.engine`` (kept for one release; pass
+        ``settings=IntegrationSettings(engine=...)`` instead): an integration engine
         (:data:`nilpotent.numeric.engines.ENGINES`, or ``"auto"``).
     refine:
         When the nilpotent iterations stop short of ``tol`` (no progress or
@@ -510,6 +525,8 @@ def plan(
 
     Raises
     ------
+    OptionError
+        A bad option, ``settings`` included (:class:`IntegrationSettings`).
     SingularPointError
         The start, the goal or an iterate is a singular point.
     PlanningError
@@ -526,10 +543,11 @@ def plan(
     """
     if not time_limit > 0:
         raise OptionError(f"time limit must be a positive number of seconds, got {time_limit}")
+    chosen = resolve_settings(settings, PLANNING_SETTINGS, engine=engine)
     with budget.time_budget(time_limit):
         return _plan(sys, start, goal, tol, max_iterations=max_iterations, anchor=anchor,
                      builder=builder, method=method, raise_on_failure=raise_on_failure,
-                     trajectory_points=trajectory_points, engine=engine, refine=refine,
+                     trajectory_points=trajectory_points, settings=chosen, refine=refine,
                      handover=handover, objective=objective)
 
 
@@ -545,7 +563,7 @@ def _plan(
     method: str,
     raise_on_failure: bool,
     trajectory_points: int,
-    engine: str,
+    settings: IntegrationSettings,
     refine: bool,
     handover: float | None,
     objective: str,
@@ -575,7 +593,7 @@ def _plan(
     initial_error = float(np.linalg.norm(x0 - xg))
     guess: list[Segment] = []  # first nilpotent step, if it made no progress
     if handover is None:
-        fast = refine and single_engine(engine, system) == "numba"
+        fast = refine and single_engine(settings, system) == "numba"
         high_step = choose_builder(system, x0) == "symbolic"  # step >= 3 near the start
         handover = HANDOVER if fast and high_step else 0.0
     elif not (handover >= 0 and math.isfinite(handover)):
@@ -588,10 +606,10 @@ def _plan(
         fixed = build(system, start)
         back, _, _, history, failure = _iterate(
             system, xg, x0, lambda x: fixed, fixed, max(tol / 100, 1e-13), max_iterations,
-            method, engine, handover, guess,
+            method, settings, handover, guess,
         )
         segments = list(reverse_segments(back or (guess if refine else [])))
-        x = simulate_candidates(system, x0, [segments], engine, hard=True)[0]
+        x = simulate_candidates(system, x0, [segments], settings, hard=True)[0]
         error = float(np.linalg.norm(x - xg))
         if error <= tol:
             failure = ""
@@ -609,17 +627,17 @@ def _plan(
                 return build(system, x)
 
         segments, x, error, history, failure = _iterate(
-            system, x0, xg, model_at, at_goal, tol, max_iterations, method, engine, handover,
+            system, x0, xg, model_at, at_goal, tol, max_iterations, method, settings, handover,
             guess,
         )
         if refine and not segments and guess:
             segments = list(guess)
-            x = simulate_candidates(system, x0, [segments], engine)[0]
+            x = simulate_candidates(system, x0, [segments], settings)[0]
             error = float(np.linalg.norm(x - xg))
 
     if refine and error > tol and segments:
         before = error
-        refined, x_ref, err_ref, more = _refine(system, x0, segments, xg, tol, engine,
+        refined, x_ref, err_ref, more = _refine(system, x0, segments, xg, tol, settings,
                                                 max_iterations)
         if more:  # keep the refinement only if it improved anything
             segments, x, error = refined, x_ref, err_ref
@@ -632,7 +650,7 @@ def _plan(
             failure = (
                 f"{failure}; the shooting refinement then went from {before:.3g} to {error:.3g}"
             )
-    trajectory = simulate_plan(system, x0, segments, trajectory_points, engine, hard=True)
+    trajectory = simulate_plan(system, x0, segments, trajectory_points, settings, hard=True)
     result = Plan(
         system=system,
         start=tuple(float(v) for v in x0),
@@ -647,6 +665,7 @@ def _plan(
         builder=builder,
         initial_error=initial_error,
         seconds=time.perf_counter() - t_start,
+        objective=objective,
     )
     if failure and raise_on_failure:
         raise PlanningError(

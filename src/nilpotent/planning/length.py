@@ -34,7 +34,8 @@ from typing import Any
 import numpy as np
 
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.errors import NilpotentError, PlanningError
+from nilpotent.errors import ComputationLimitError, NilpotentError, PlanningError
+from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.geodesic import control_length, shortest_geodesic
 
@@ -42,6 +43,10 @@ __all__ = ["OBJECTIVES", "length_report", "method_for"]
 
 #: Objectives of the local steering: name → the nilpotent steering method it uses.
 OBJECTIVES: dict[str, str] = {"reach": "auto", "length": "geodesic"}
+
+#: Most seconds the plan report spends shooting the approximation's geodesic (step >= 3)
+#: for its ``lower_bound``; beyond, the bound is null with the reason.
+LOWER_BOUND_SECONDS = 20.0
 
 
 def method_for(objective: str, method: str = "auto") -> str:
@@ -105,21 +110,32 @@ def _reproduces(system: ControlSystem, model: Any, goal: np.ndarray) -> bool:
 
 
 def _approximation_distance(
-    system: ControlSystem, start: Sequence[float], goal: Sequence[float]
+    system: ControlSystem, start: Sequence[float], goal: Sequence[float], objective: str
 ) -> tuple[float | None, str, bool, bool | None]:
     """Length of the shortest geodesic found of the approximation at the start, why not,
-    whether the approximation is the system, and whether the geodesic is abnormal."""
+    whether the approximation is the system, and whether the geodesic is abnormal.
+
+    For step >= 3 the shooting costs seconds: it runs only for plans of objective
+    ``"length"``, within :data:`LOWER_BOUND_SECONDS` (and the budget in force)."""
     from nilpotent.planning.local_model import choose_builder, numeric_model, symbolic_model
 
     x0 = np.asarray(start, dtype=float)
     xg = np.asarray(goal, dtype=float)
     try:
         if choose_builder(system, x0) != "numeric":
+            if objective != "length":
+                return (None, "for step >= 3 the approximation's geodesic (the shooting, "
+                        "seconds of work) is computed for --objective length only", False, None)
             from nilpotent.planning.shooting import shortest_normal_geodesic
 
             model = symbolic_model(system, x0)
-            shot = shortest_normal_geodesic(model.nilpotent, np.zeros(system.n),
-                                            model.forward(xg))
+            try:
+                with budget.time_budget(LOWER_BOUND_SECONDS):
+                    shot = shortest_normal_geodesic(model.nilpotent, np.zeros(system.n),
+                                                    model.forward(xg))
+            except ComputationLimitError:
+                return (None, f"the shooting of the approximation's geodesic did not end "
+                        f"within {LOWER_BOUND_SECONDS:g} s (or the time limit)", False, None)
             return shot.length, "", False, shot.abnormal
         model = numeric_model(system, x0)
         geo = shortest_geodesic(model.nilpotent, np.zeros(system.n), model.forward(xg))
@@ -133,6 +149,7 @@ def length_report(
     start: Sequence[float],
     goal: Sequence[float],
     segments: Sequence[Segment],
+    objective: str = "reach",
 ) -> tuple[dict[str, Any], dict[str, str]]:
     """The plan JSON's ``length``, ``lower_bound``, ``lower_bound_kind``, ``length_ratio``
     and ``abnormal``.
@@ -145,6 +162,8 @@ def length_report(
         Model coordinates.
     segments : sequence of Segment
         The plan's controls.
+    objective : str
+        The plan's objective; for step >= 3 the bound is computed for ``"length"`` only.
 
     Returns
     -------
@@ -152,7 +171,7 @@ def length_report(
         The fields, and for each one that is ``None`` the reason.
     """
     length = control_length(segments)
-    bound, why, exact, abnormal = _approximation_distance(system, start, goal)
+    bound, why, exact, abnormal = _approximation_distance(system, start, goal, objective)
     reasons: dict[str, str] = {}
     if abnormal is None:
         reasons["abnormal"] = why or "checked for step >= 3 (the shooting) only"

@@ -67,10 +67,11 @@ from nilpotent.errors import (
     MissingExtraError,
     OptionError,
 )
+from nilpotent.numeric.settings import IntegrationSettings
 from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment, constant_segment
 from nilpotent.planning.geodesic import control_length
-from nilpotent.planning.simulation import simulate_candidates
+from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_candidates
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.strict_json import json_object
 
@@ -383,7 +384,7 @@ def _solve(
 
 def _correct(
     ca: Any, system: ControlSystem, step: Any, x0: np.ndarray, xg: np.ndarray,
-    u: np.ndarray, tol: float, engine: str,
+    u: np.ndarray, tol: float, settings: IntegrationSettings,
 ) -> tuple[np.ndarray, float]:
     """Gauss–Newton on the product's endpoint map, Jacobian of the RK4 roll-out."""
     m, n_int = u.shape
@@ -392,7 +393,7 @@ def _correct(
     jac = ca.Function("endpoint_jacobian", [us], [ca.jacobian(end, ca.vec(us))])
 
     def error_of(v: np.ndarray) -> tuple[np.ndarray, float]:
-        reached = simulate_candidates(system, x0, [_segments(v)], engine)[0]
+        reached = simulate_candidates(system, x0, [_segments(v)], settings)[0]
         err = float(np.linalg.norm(reached - xg))
         return reached, err if math.isfinite(err) else math.inf
 
@@ -419,7 +420,7 @@ def refine_segments(
     tol: float,
     *,
     intervals: int = INTERVALS,
-    engine: str = "auto",
+    settings: IntegrationSettings = PLANNING_SETTINGS,
 ) -> tuple[list[Segment], Refinement]:
     """Shorter controls from ``start`` to ``goal`` by direct optimal control, if they verify.
 
@@ -436,8 +437,9 @@ def refine_segments(
     intervals : int
         Shooting intervals ``N`` (the refined plan has ``N`` constant segments of
         duration ``1/N``).
-    engine : str
-        Integration engine of the re-simulations.
+    settings : IntegrationSettings
+        How the true system is re-simulated (default
+        :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`).
 
     Returns
     -------
@@ -477,7 +479,7 @@ def refine_segments(
                     solver_iterations=its)
     solved = {"solver_status": status, "solver_iterations": its}
     try:
-        u, err = _correct(ca, system, step, x0, xg, u, tol, engine)
+        u, err = _correct(ca, system, step, x0, xg, u, tol, settings)
     except IntegrationError as exc:
         return keep(f"the refined controls cannot be re-simulated: {exc}", **solved)
     refined = _segments(u)
@@ -486,7 +488,7 @@ def refine_segments(
     if not err <= tol:
         return keep(f"the re-simulated refined controls miss the goal by {err:.3g} > tol "
                     f"{tol:g}", **solved)
-    v = verify_segments(checker, x0, refined, xg, VERIFY_POINTS, engine)
+    v = verify_segments(checker, x0, refined, xg, VERIFY_POINTS, settings)
     if not v.admissible:
         why = checker.why_invalid(v.states[int(np.argmin(
             checker.valid(v.states)))]) or "not admissible between samples"
@@ -502,7 +504,7 @@ def refine_segments(
 
 def refine_route(
     refine: str, checker: Checker, start: np.ndarray, goal: np.ndarray,
-    segments: list[Segment], tol: float, engine: str,
+    segments: list[Segment], tol: float, settings: IntegrationSettings,
 ) -> tuple[list[Segment], Refinement] | None:
     """What :func:`~nilpotent.planning.global_planner.plan_global` does with ``refine``:
     ``None`` for ``"none"``, else :func:`refine_segments` of the whole plan; when the
@@ -512,7 +514,7 @@ def refine_route(
         return None
     t0 = time.perf_counter()
     try:
-        return refine_segments(checker, start, goal, segments, tol, engine=engine)
+        return refine_segments(checker, start, goal, segments, tol, settings=settings)
     except ComputationLimitError as exc:
         return list(segments), Refinement("ocp", False, f"stopped by the time limit: {exc}",
                                           control_length(segments),

@@ -53,20 +53,20 @@ import numpy as np
 import sympy as sp
 
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.errors import PlanningError
+from nilpotent.errors import OptionError, PlanningError
 from nilpotent.planning import budget
-from nilpotent.planning.holonomic_path import box
+from nilpotent.planning.holonomic_path import box, ompl_path
 from nilpotent.planning.verify import Checker
 
 __all__ = [
-    "IMPROVE_FRACTION", "PLANNERS", "BallBoxMetric", "OptimalPath", "ball_box_metric",
-    "optimal_path", "rrtstar_path", "shortcut",
+    "IMPROVE_FRACTION", "PLANNERS", "BallBoxMetric", "HolonomicStage", "OptimalPath",
+    "ball_box_metric", "optimal_path", "planner_json", "shortcut",
 ]
 
 #: Global planners of :func:`~nilpotent.planning.global_planner.plan_global`: the holonomic
 #: stage's OMPL planner.
 PLANNERS = ("rrtconnect", "rrtstar")
-#: The share of its time that RRT* spends improving its first path (:func:`rrtstar_path`).
+#: The share of its time that RRT* spends improving its first path (:class:`HolonomicStage`).
 IMPROVE_FRACTION = 0.5
 #: Constant of the weight ≥ 2 terms of the ball–box cost (module doc).
 BOX_CONSTANT = 2.0 * math.sqrt(math.pi)
@@ -336,17 +336,47 @@ def _chord(valid: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarr
     return bool(np.all(valid(a + t * (b - a))))
 
 
-def rrtstar_path(found: list[OptimalPath], piece: float) -> Callable[..., list[np.ndarray]]:
-    """The holonomic stage of :func:`~nilpotent.planning.global_planner.plan_global` for
-    ``planner="rrtstar"``: :func:`optimal_path` with the signature of
-    :func:`~nilpotent.planning.holonomic_path.ompl_path` (``seconds`` its 4th argument),
-    improving for :data:`IMPROVE_FRACTION` of its time; each result is appended to
-    ``found``."""
+class HolonomicStage:
+    """The holonomic stage of :func:`~nilpotent.planning.global_planner.plan_global` for a
+    planner of :data:`PLANNERS`: :meth:`path` has the signature of
+    :func:`~nilpotent.planning.holonomic_path.ompl_path` (``seconds`` its 4th argument);
+    for ``"rrtstar"`` it runs :func:`optimal_path` (improving for :data:`IMPROVE_FRACTION`
+    of its time, edges cut into pieces of ``piece``) and keeps each result in ``found``.
 
-    def path(*args: Any, **kwargs: Any) -> list[np.ndarray]:
+    Raises
+    ------
+    OptionError
+        An unknown planner.
+    """
+
+    def __init__(self, planner: str, piece: float) -> None:
+        if planner not in PLANNERS:
+            raise OptionError(f"unknown planner {planner!r} (choose from {', '.join(PLANNERS)})")
+        self.planner, self.piece = planner, piece
+        self.found: list[OptimalPath] = []
+
+    def path(self, *args: Any, **kwargs: Any) -> list[np.ndarray]:
+        """The path from OMPL (RRTConnect, or RRT* under the ball–box cost)."""
+        if self.planner == "rrtconnect":
+            return ompl_path(*args, **kwargs)
         best = optimal_path(*args, **kwargs, improve_seconds=IMPROVE_FRACTION * args[3],
-                            piece=piece)
-        found.append(best)
+                            piece=self.piece)
+        self.found.append(best)
         return [np.array(p) for p in best.points]
 
-    return path
+    def fields(self) -> dict[str, Any]:
+        """``planner``, ``path_cost``, ``cost_history`` of the last path (for ``GlobalPlan``)."""
+        last = self.found[-1] if self.found else None
+        return {"planner": self.planner, "path_cost": None if last is None else last.cost,
+                "cost_history": () if last is None else last.cost_history}
+
+
+def planner_json(planner: str, path_cost: float | None,
+                 cost_history: Sequence[tuple[float, float]],
+                 reasons: dict[str, str]) -> dict[str, Any]:
+    """The plan JSON's ``planner``, ``path_cost``, ``cost_history`` (the reason of a ``null``
+    ``path_cost`` added to ``reasons``)."""
+    if path_cost is None:
+        reasons["path_cost"] = "the holonomic stage (rrtconnect, or none) has no cost"
+    return {"planner": planner, "path_cost": path_cost,
+            "cost_history": [list(c) for c in cost_history]}

@@ -29,7 +29,7 @@ from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import IntegrationError
 from nilpotent.numeric.engines import choose_engine
 from nilpotent.numeric.integrate import Status, integrate
-from nilpotent.numeric.settings import DEFAULT_SETTINGS
+from nilpotent.numeric.settings import DEFAULT_SETTINGS, IntegrationSettings
 from nilpotent.numeric.signals import Signal
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
@@ -37,15 +37,17 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.local_model import compiled_system
 from nilpotent.simulation.trajectory import Trajectory, simulate, stationary
 
-#: The integration of the true system (adaptive DOP853): the one default
-#: (:data:`nilpotent.numeric.settings.DEFAULT_SETTINGS`) with ``rtol = 1e-12``,
-#: ``atol = 1e-13`` (a documented override: a plan is checked against its goal
-#: tolerance, far below the default's); the engine and the step cap are chosen
-#: per call.
-PLANNING_SETTINGS = DEFAULT_SETTINGS.replace(rtol=1e-12, atol=1e-13)
 #: Most steps of one trajectory per segment of its controls (accepted and rejected);
 #: more: given up.
 MAX_STEPS = 20_000
+#: The integration of the true system (adaptive DOP853): the one default
+#: (:data:`nilpotent.numeric.settings.DEFAULT_SETTINGS`) with ``rtol = 1e-12``,
+#: ``atol = 1e-13`` (a documented override: a plan is checked against its goal
+#: tolerance, far below the default's) and ``max_steps = MAX_STEPS``.  In planning,
+#: ``max_steps`` counts the steps *per segment of the controls* (a trajectory of
+#: ``k`` segments may take ``k * max_steps``), and fewer are allowed when the time
+#: budget is short (module doc); ``engine="auto"`` means :func:`single_engine`.
+PLANNING_SETTINGS = DEFAULT_SETTINGS.replace(rtol=1e-12, atol=1e-13, max_steps=MAX_STEPS)
 #: First guess of the wall-clock cost of one step per trajectory, by engine (seconds),
 #: replaced by what is measured.
 _STEP_COST: dict[str, float] = {"scipy": 2e-3, "numba": 2e-5, "heyoka": 2e-5, "numpy": 1e-4}
@@ -66,8 +68,8 @@ def _learn(engine: str, seconds: float, steps: float, batch: int) -> None:
         _STEP_COST[engine] = 0.5 * _STEP_COST.get(engine, per) + 0.5 * per
 
 
-def _bounded_integrate(compiled, xs: np.ndarray, inputs: Signal, engine: str, what: str,
-                       hard: bool = False, most: int = MAX_STEPS):
+def _bounded_integrate(compiled, xs: np.ndarray, inputs: Signal, settings: IntegrationSettings,
+                       engine: str, what: str, hard: bool = False, most: int = MAX_STEPS):
     """:func:`integrate` within the budget; returns ``(final, ok)``.
 
     Raises
@@ -81,7 +83,7 @@ def _bounded_integrate(compiled, xs: np.ndarray, inputs: Signal, engine: str, wh
         cap = _step_cap(engine, batch, hard, most)
         t0 = time.perf_counter()
         sol = integrate(compiled, xs, inputs,
-                        settings=PLANNING_SETTINGS.replace(engine=engine, max_steps=cap))
+                        settings=settings.replace(engine=engine, max_steps=cap))
         spent = time.perf_counter() - t0
         steps = np.asarray(sol.steps, dtype=float) + np.asarray(sol.rejected, dtype=float)
         _learn(engine, spent, float(steps.sum()) / max(1, batch), batch)
@@ -91,23 +93,24 @@ def _bounded_integrate(compiled, xs: np.ndarray, inputs: Signal, engine: str, wh
         budget.check(what, hard)  # cut by the time left: retried while time remains
 
 
-def single_engine(engine: str, system: ControlSystem) -> str:
-    """The engine (:mod:`nilpotent.numeric.engines`) that ``engine`` means for one trajectory
-    of ``system``: with ``"auto"``, numba when its kernels for the system are already
-    compiled, else scipy (one plan costs less than a compilation)."""
-    return choose_engine(compiled_system(system), "adaptive", engine, 1).name
+def single_engine(settings: IntegrationSettings, system: ControlSystem) -> str:
+    """The engine (:mod:`nilpotent.numeric.engines`) that ``settings.engine`` means for one
+    trajectory of ``system``: with ``"auto"``, numba when its kernels for the system are
+    already compiled, else scipy (one plan costs less than a compilation)."""
+    return choose_engine(compiled_system(system), settings.method, settings.engine, 1).name
 
 
 def simulate_candidates(
     system: ControlSystem,
     x0: Sequence[float] | State,
     candidates: Sequence[Sequence[Segment]],
-    engine: str = "auto",
+    settings: IntegrationSettings = PLANNING_SETTINGS,
     hard: bool = False,
 ) -> np.ndarray:
     """End states ``(len(candidates), n)`` of the true system from ``x0``; NaN where it failed.
 
-    Integrated within the planning budget (module doc; ``hard``: up to its hard deadline).
+    Integrated with ``settings`` (:data:`PLANNING_SETTINGS` by default) within the
+    planning budget (module doc; ``hard``: up to its hard deadline).
 
     Raises
     ------
@@ -124,15 +127,16 @@ def simulate_candidates(
         if length == 0:
             out[idxs] = x
             continue
-        name = single_engine(engine, system)
+        name = single_engine(settings, system)
         # one trajectory at a time where the engine runs them one by one anyway, so that
         # the budget is checked between them
         groups = [[i] for i in idxs] if name == "scipy" else [idxs]
         for group in groups:
             inputs = Signal.stack([candidates[i] for i in group])
             final, ok = _bounded_integrate(
-                compiled, np.repeat(x[None, :], len(group), axis=0), inputs, name,
-                "integrating candidate controls of the true system", hard, MAX_STEPS * length)
+                compiled, np.repeat(x[None, :], len(group), axis=0), inputs, settings, name,
+                "integrating candidate controls of the true system", hard,
+                settings.max_steps * length)
             final[~ok] = np.nan
             out[group] = final
     return out
@@ -143,7 +147,7 @@ def simulate_path(
     x0: Sequence[float] | State,
     segments: Sequence[Segment],
     points_per_segment: int = 40,
-    engine: str = "auto",
+    settings: IntegrationSettings = PLANNING_SETTINGS,
     hard: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(times, states)`` of the true system under ``segments`` (:func:`simulate_plan`'s samples).
@@ -155,7 +159,7 @@ def simulate_path(
     ComputationLimitError
         The samples would exceed the memory budget, or the time budget ran out.
     """
-    traj = simulate_plan(system, x0, segments, points_per_segment, engine, hard)
+    traj = simulate_plan(system, x0, segments, points_per_segment, settings, hard)
     return np.array(traj.times), np.array(traj.states)
 
 
@@ -164,13 +168,14 @@ def simulate_plan(
     x0: Sequence[float] | State,
     segments: Sequence[Segment],
     points_per_segment: int = 40,
-    engine: str = "auto",
+    settings: IntegrationSettings = PLANNING_SETTINGS,
     hard: bool = False,
 ) -> Trajectory:
     """The true system's :class:`~nilpotent.simulation.trajectory.Trajectory` under
     ``segments``, sampled ``points_per_segment`` times in every segment.
 
-    Within the planning budget (module doc; ``hard``: up to its hard deadline).
+    Integrated with ``settings`` (:data:`PLANNING_SETTINGS` by default) within the
+    planning budget (module doc; ``hard``: up to its hard deadline).
 
     Raises
     ------
@@ -194,15 +199,15 @@ def simulate_plan(
     )
     times = times[times <= starts[-1]]
     what = "re-simulating the motion of the true system"
-    name = single_engine(engine, system)
+    name = single_engine(settings, system)
     while True:
         budget.check(what, hard)
-        most = MAX_STEPS * len(segments)
+        most = settings.max_steps * len(segments)
         cap = _step_cap(name, 1, hard, most)
         t0 = time.perf_counter()
         traj = simulate(
             compiled_system(system), Signal.from_segments(segments), np.asarray(x0, dtype=float),
-            times=times, settings=PLANNING_SETTINGS.replace(engine=name, max_steps=cap),
+            times=times, settings=settings.replace(engine=name, max_steps=cap),
         )
         spent = time.perf_counter() - t0
         if traj.status != Status.MAX_STEPS or cap >= most:

@@ -50,6 +50,7 @@ import numpy as np
 
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, IntegrationError, OptionError, PlanningError
+from nilpotent.numeric.settings import IntegrationSettings
 from nilpotent.numeric.signals import InputSignal, Segment, Signal
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
@@ -469,7 +470,7 @@ class TimedTrajectory:
 def retime(
     system: ControlSystem, start: Sequence[float] | State, segments: Sequence[Segment],
     bounds: InputBounds, *, step: float | None = None, reached: Sequence[float] | None = None,
-    engine: str = "auto",
+    settings: IntegrationSettings | None = None,
 ) -> TimedTrajectory:
     """The plan ``segments`` from ``start`` re-timed under ``bounds`` (module doc), sampled.
 
@@ -489,8 +490,9 @@ def retime(
     reached : sequence of float or None
         The plan's verified end point: the last sample's state must agree with it
         (to ``1e-8`` relative), and is then set to it.
-    engine : str
-        Integration engine of the re-simulation that gives the states.
+    settings : IntegrationSettings or None
+        How the re-simulation that gives the states integrates (default
+        :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`).
 
     Raises
     ------
@@ -564,7 +566,11 @@ def retime(
     s_all = np.clip(np.concatenate(plan_times), 0.0, starts[-1])
     s_all[0], s_all[-1] = 0.0, starts[-1]
     u_all = np.vstack(inputs)
-    states = _states_at(system, start, segs, s_all, engine)
+    if settings is None:
+        from nilpotent.planning.simulation import PLANNING_SETTINGS
+
+        settings = PLANNING_SETTINGS
+    states = _states_at(system, start, segs, s_all, settings)
     if reached is not None:
         want = np.asarray(reached, dtype=float)
         if not np.allclose(states[-1], want, rtol=1e-8, atol=1e-8):
@@ -582,17 +588,18 @@ def retime(
 
 
 def _states_at(system: ControlSystem, start: Sequence[float] | State,
-               segments: Sequence[Segment], plan_times: np.ndarray, engine: str) -> np.ndarray:
+               segments: Sequence[Segment], plan_times: np.ndarray,
+               settings: IntegrationSettings) -> np.ndarray:
     """The true system's states at the plan times (non-decreasing), one re-simulation."""
     from nilpotent.planning.local_model import compiled_system
-    from nilpotent.planning.simulation import PLANNING_SETTINGS, single_engine
+    from nilpotent.planning.simulation import single_engine
     from nilpotent.simulation.trajectory import simulate
 
     budget.check("re-simulating the re-timed plan")
     unique, inverse = np.unique(plan_times, return_inverse=True)
     traj = simulate(compiled_system(system), Signal.from_segments(segments),
                     np.asarray(start, dtype=float), times=unique,
-                    settings=PLANNING_SETTINGS.replace(engine=single_engine(engine, system)))
+                    settings=settings.replace(engine=single_engine(settings, system)))
     states = np.asarray(traj.states, dtype=float)
     if states.shape[0] != unique.size or not np.all(np.isfinite(states)):
         raise IntegrationError("the re-simulation of the re-timed plan failed")

@@ -24,10 +24,11 @@ import shapely
 from nilpotent.core.model.outline import Limits
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
+from nilpotent.numeric.settings import IntegrationSettings
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
 from nilpotent.planning.robot import Robot, singular_margin_function
-from nilpotent.planning.simulation import simulate_path
+from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.world import World
 
 __all__ = ["Checker", "Verification", "verify_segments", "verify_states"]
@@ -280,10 +281,11 @@ def verify_segments(
     segments: Sequence[Segment],
     goal: Sequence[float] | State,
     points_per_segment: int = 200,
-    engine: str = "auto",
+    settings: IntegrationSettings = PLANNING_SETTINGS,
 ) -> Verification:
-    """Re-simulate ``segments`` from ``start`` on the true system (DOP853, rtol 1e-12), sample
+    """Re-simulate ``segments`` from ``start`` on the true system (``settings``, by default
+    :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`: DOP853, rtol 1e-12), sample
     ``points_per_segment`` per segment, and measure the motion (:func:`verify_states`)."""
     times, states = simulate_path(checker.system, start, list(segments), points_per_segment,
-                                  engine, hard=True)  # a plan found in time: verified in time
+                                  settings, hard=True)  # a plan found in time: verified in time
     return verify_states(checker, times, states, goal)

@@ -44,7 +44,7 @@ import os
 import shutil
 import tempfile
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,6 +55,7 @@ import sympy as sp
 
 from nilpotent import interrupts
 from nilpotent.outputs import remove_stale_temporaries, temporary_prefix
+from nilpotent.progress import Progress, ProgressCallback, ProgressEvent
 from nilpotent.progress import progress as report_progress
 from nilpotent.report.output import check_target, move_into_place, write_csv, write_json
 from nilpotent.report.reproduction_data import (
@@ -83,9 +84,6 @@ __all__ = [
 
 #: Where ``nilpotent reproduce`` writes when no ``--out`` is given.
 DEFAULT_OUT = "nilpotent-paper"
-
-Progress = Callable[[str, int, int], None]
-
 
 #: The full reproduction.
 FULL = Settings(0.3, 181, 48, tuple(float(a) for a in np.geomspace(0.02, 0.5, 10)), 150, 80)
@@ -197,7 +195,7 @@ def reproduce(
     out_dir: str | os.PathLike[str] = DEFAULT_OUT,
     quick: bool = False,
     *,
-    progress: Progress | None = None,
+    progress: ProgressCallback | None = None,
 ) -> Reproduction:
     """Reproduce the paper end to end and write the page, figures, data and audit.
 
@@ -208,10 +206,11 @@ def reproduce(
         the end (see the module docstring for when it is refused).
     quick : bool
         Fewer amplitudes, samples and frames (:data:`QUICK` instead of :data:`FULL`).
-    progress : callable or None
-        Called as ``progress(step, done, total)`` before each step (the steps
-        are also reported on stderr through :mod:`nilpotent.progress` when
-        that is enabled).
+    progress : ProgressCallback or None
+        Called with ``ProgressEvent(step, done, total)`` before each step (the
+        step's name, the steps done, their number; :mod:`nilpotent.progress`) and
+        ``ProgressEvent("done", total, total)`` at the end (the steps are also
+        reported on stderr through :mod:`nilpotent.progress` when that is enabled).
 
     Returns
     -------
@@ -280,7 +279,7 @@ _STEPS = (
 class _Steps:
     """Times the named steps and reports them (callback and :mod:`nilpotent.progress`)."""
 
-    def __init__(self, callback: Progress | None, bar: Any) -> None:
+    def __init__(self, callback: ProgressCallback | None, bar: Progress) -> None:
         self.callback = callback
         self.bar = bar
         self.done = 0
@@ -288,14 +287,15 @@ class _Steps:
 
     @contextmanager
     def step(self, name: str) -> Iterator[None]:
+        event = ProgressEvent(name, self.done, len(_STEPS))
         if self.callback is not None:
-            self.callback(name, self.done, len(_STEPS))
-        self.bar.update(self.done, detail=name)
+            self.callback(event)
+        self.bar(event)
         start = time.perf_counter()
         yield
         self.timings[name] = time.perf_counter() - start
         self.done += 1
-        self.bar.update(self.done)
+        self.bar(ProgressEvent(name, self.done, len(_STEPS)))
 
 
 @dataclass
@@ -316,7 +316,8 @@ class _Files:
         return self.out / "data"
 
 
-def _run(out: Path, settings: Settings, quick: bool, callback: Progress | None) -> Reproduction:
+def _run(out: Path, settings: Settings, quick: bool,
+         callback: ProgressCallback | None) -> Reproduction:
     start = time.perf_counter()
     files = _Files(out)
     files.figures_dir.mkdir()
@@ -354,7 +355,7 @@ def _run(out: Path, settings: Settings, quick: bool, callback: Progress | None) 
         with steps.step(_STEPS[8]):
             index = _write_page(data, PageFigures(**stems, animations=anim_files), out)
     if callback is not None:
-        callback("done", len(_STEPS), len(_STEPS))
+        callback(ProgressEvent("done", len(_STEPS), len(_STEPS)))
     return Reproduction(
         out,
         index,

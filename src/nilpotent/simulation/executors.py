@@ -48,6 +48,7 @@ from pathlib import Path
 from typing import Any
 
 from nilpotent.errors import DaskError, MissingExtraError, NilpotentError, OptionError
+from nilpotent.progress import ProgressCallback, ProgressEvent
 
 __all__ = ["DEFAULT_CONNECT_TIMEOUT", "DEFAULT_PROGRESS_TIMEOUT", "MAX_DASK_TIMEOUT",
            "MIN_DASK_CHUNK", "Execution", "check_dask", "execute", "loopback_cluster",
@@ -292,9 +293,10 @@ def execute(
     sizes: Sequence[int],
     *,
     dask: Any = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: ProgressCallback | None = None,
     connect_timeout: float | None = None,
     progress_timeout: float | None = None,
+    stage: str = "tasks",
 ) -> Execution:
     """``[func(task) for task in tasks]``, here or on Dask (module docstring).
 
@@ -309,14 +311,17 @@ def execute(
     dask : Any
         ``None`` (this process), ``"local"``, a scheduler address, a
         :class:`distributed.Client` or a cluster object.
-    progress : Callable[[int, int], None] or None
-        Called as ``progress(done, total)`` after each task with the sums of
-        ``sizes`` (the CLI feeds it to :func:`nilpotent.progress.progress`).
+    progress : ProgressCallback or None
+        Called with ``ProgressEvent(stage, done, total)`` after each task, ``done`` and
+        ``total`` the sums of ``sizes`` (:mod:`nilpotent.progress`; the CLI passes its
+        bar).
     connect_timeout : float or None
         Seconds to reach the scheduler (default :data:`DEFAULT_CONNECT_TIMEOUT`).
     progress_timeout : float or None
         Seconds without a finished task before giving up (default
         :data:`DEFAULT_PROGRESS_TIMEOUT`).
+    stage : str
+        The stage named in the progress events.
 
     Returns
     -------
@@ -335,7 +340,7 @@ def execute(
 
     def tick(done: int) -> None:
         if progress is not None:
-            progress(done, total)
+            progress(ProgressEvent(stage, done, total))
 
     if dask is None:
         check_dask(None, 0, connect_timeout=connect_timeout, progress_timeout=progress_timeout)

@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -59,6 +59,7 @@ from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PointError
 from nilpotent.numeric.settings import DEFAULT_SETTINGS, IntegrationSettings, resolve_settings
 from nilpotent.numeric.signals import bracket_inputs, check_bracket
+from nilpotent.progress import ProgressCallback
 from nilpotent.simulation.executors import MIN_DASK_CHUNK, check_dask, execute, versions
 from nilpotent.simulation.pair import CompiledPair
 from nilpotent.simulation.scaling import DEFAULT_AMPLITUDES
@@ -261,7 +262,7 @@ def sweep(
     max_steps: int | None = None,
     chunk_size: int = 4096,
     dask: Any = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: ProgressCallback | None = None,
     dask_connect_timeout: float | None = None,
     dask_progress_timeout: float | None = None,
 ) -> SweepResult:
@@ -313,8 +314,11 @@ def sweep(
         (:class:`distributed.deploy.Cluster`, e.g. dask-jobqueue's): that
         cluster (docs/sweeps.md: the cluster recipe).  Needs the ``dask`` extra
         (:class:`~nilpotent.errors.MissingExtraError` otherwise).
-    progress:
-        Called as ``progress(done_pairs, total_pairs)`` after each chunk.
+    progress : ProgressCallback or None
+        Called after each chunk with ``ProgressEvent("bracket motions", done, total)``
+        (:class:`~nilpotent.progress.ProgressEvent`: bracket motions, each a trajectory
+        of the system and one of its approximation, done and in all); the bar
+        :class:`~nilpotent.progress.Progress` is one such callback.
     dask_connect_timeout, dask_progress_timeout:
         Seconds to reach a scheduler given by address (default
         :data:`~nilpotent.simulation.executors.DEFAULT_CONNECT_TIMEOUT`), and
@@ -431,7 +435,7 @@ def sweep(
             ))
     done = execute(_run_chunk, chunks, [c.rows.size for c in chunks], dask=dask,
                    progress=progress, connect_timeout=dask_connect_timeout,
-                   progress_timeout=dask_progress_timeout)
+                   progress_timeout=dask_progress_timeout, stage="bracket motions")
     outputs, backend, scheduler, wall = (done.outputs, done.backend, done.scheduler,
                                          done.wall_time)
 

@@ -61,7 +61,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from contextlib import nullcontext
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 
 import sympy as sp
 
@@ -145,6 +145,9 @@ class PrivilegedCoordinates:
     inverse_poly:
         $z_k$ as :class:`~nilpotent.core.coordinates.jets.Poly` in $y$ (the exact form of
         ``inverse``, before $x = p + Bz$).
+    known_jets:
+        :meth:`field_jets` with ``extra=1`` where already computed (the certificate
+        of the orders computes them): kept instead of computed again (not a field).
     """
 
     method: str
@@ -164,7 +167,12 @@ class PrivilegedCoordinates:
     """$y_j$ as :class:`Poly` in the linear adapted coordinates $z$."""
     inverse_poly: tuple[Poly, ...] = field(default=(), repr=False, compare=False)
     """$z_k$ as :class:`Poly` in $y$."""
+    known_jets: InitVar[tuple[tuple[Poly, ...], ...] | None] = None
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False, hash=False)
+
+    def __post_init__(self, known_jets: tuple[tuple[Poly, ...], ...] | None) -> None:
+        if known_jets is not None:
+            self._cache[("field_jets", 1)] = known_jets
 
     # --- views ------------------------------------------------------------------
     @property
@@ -630,6 +638,6 @@ def privileged_coordinates(
         linear_part=ctx.A,
         forward_poly=tuple(forward_poly),
         inverse_poly=tuple(inverse_poly),
+        known_jets=jets,
     )
-    coords._cache[("field_jets", 1)] = jets
     return coords

@@ -9,6 +9,7 @@ docstring is the written contract.
 from __future__ import annotations
 
 import abc
+import weakref
 from enum import IntEnum
 from typing import Any, ClassVar
 
@@ -16,10 +17,37 @@ import numpy as np
 
 from nilpotent.errors import MissingExtraError, OptionError
 
-__all__ = ["Engine", "EngineOutput", "Status", "check_times", "state_status"]
+__all__ = ["Engine", "EngineOutput", "Status", "check_times", "compiled_memo", "state_status"]
 
 #: ``(final (B, n), samples (B, T, n), info (B, 4))``: what :meth:`Engine.solve` returns.
 EngineOutput = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+class _Memo(dict):
+    """The engines' cache of one system (a ``dict`` that weak references can point to)."""
+
+
+# one memo per key: systems with the same fields (a renamed model, the same fields
+# built twice) share their compiled integrators; it lives as long as one of them
+_SHARED: weakref.WeakValueDictionary[str, _Memo] = weakref.WeakValueDictionary()
+_OF: weakref.WeakKeyDictionary[Any, _Memo] = weakref.WeakKeyDictionary()
+
+
+def compiled_memo(system: Any) -> dict:
+    """The engines' per-process cache for a compiled system (owned here, not by the system).
+
+    What the engines build for ``system`` (a
+    :class:`~nilpotent.numeric.compile.CompiledSystem`) and keep: heyoka's compiled
+    integrators, whether numba's kernels were called.  Systems with the same
+    ``key`` (the same fields) share it; it is freed with the last of them.
+    """
+    memo = _OF.get(system)
+    if memo is None:
+        memo = _SHARED.get(system.key)
+        if memo is None:
+            memo = _SHARED.setdefault(system.key, _Memo())
+        _OF[system] = memo
+    return memo
 
 
 class Status(IntEnum):

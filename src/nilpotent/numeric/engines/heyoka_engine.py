@@ -98,7 +98,7 @@ import sympy as sp
 
 from nilpotent.errors import MissingExtraError, OptionError
 from nilpotent.numeric.compile import CompiledSystem
-from nilpotent.numeric.engines.base import Engine, EngineOutput
+from nilpotent.numeric.engines.base import Engine, EngineOutput, compiled_memo
 from nilpotent.numeric.engines.heyoka_events import run_chunk
 from nilpotent.numeric.engines.heyoka_setup import (
     quiet_logger,
@@ -180,7 +180,7 @@ def heyoka_handles(system: CompiledSystem) -> bool:
 
     Kept in the system's memo.
     """
-    memo = system._memo
+    memo = compiled_memo(system)
     if "heyoka-handles" not in memo:
         hy = _heyoka()
         names = [f"q{k}" for k in range(system.n)]
@@ -347,7 +347,7 @@ def taylor_integrator(
     in the system's memo (shared by every system with the same key).
     """
     key = ("heyoka", int(harmonics), float(tol), used, tuple(frozen))
-    memo = system._memo  # the CompiledSystem's per-process cache
+    memo = compiled_memo(system)  # the engines' per-process cache of the system
     if key not in memo:
         hy = _heyoka()
         sysd, _ = _rhs(system, int(harmonics), used, tuple(frozen))

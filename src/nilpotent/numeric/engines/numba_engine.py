@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from nilpotent.numeric.compile import CompiledSystem, numba_available
-from nilpotent.numeric.engines.base import Engine, EngineOutput
+from nilpotent.numeric.engines.base import Engine, EngineOutput, compiled_memo
 
 __all__ = ["NumbaEngine", "kernels_cached"]
 
@@ -87,7 +87,7 @@ class NumbaEngine(Engine):
         info = np.zeros((batch, 4))
         from nilpotent.progress import COMPILING, progress
 
-        first = "numba-called" not in system._memo and not kernels_cached(system)
+        first = "numba-called" not in compiled_memo(system) and not kernels_cached(system)
         stage = progress(COMPILING) if first else contextlib.nullcontext()
         with stage, _numba_threads(threads):
             mod.integrate_batch(
@@ -95,5 +95,5 @@ class NumbaEngine(Engine):
                 times, adaptive, steps, rtol, atol, max_steps, min_step, bound, final, samples,
                 info,
             )
-        system._memo["numba-called"] = True
+        compiled_memo(system)["numba-called"] = True
         return final, samples, info

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Collection, Iterable
 
 from nilpotent.errors import OptionError
+from nilpotent.progress import ProgressCallback, ProgressEvent
 from nilpotent.report.audit.computed import Computed
 from nilpotent.report.audit.entries import Audit, AuditEntry
 from nilpotent.report.audit.section4 import (
@@ -63,7 +64,7 @@ def run_audit(
     paper: PaperContent | None = None,
     *,
     only: Collection[str] | None = None,
-    progress: Callable[[str], None] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> Audit:
     """Check every statement of the paper by computation.
 
@@ -73,8 +74,9 @@ def run_audit(
         The parsed paper (default: :func:`read_paper` of the shipped source).
     only:
         Run only these groups of checks (names of :data:`CHECKS`); default all.
-    progress:
-        Called with the name of each group of checks before it runs.
+    progress : ProgressCallback or None
+        Called with ``ProgressEvent(group, done, total)`` before each group of checks
+        runs (its name, the groups done, their number; :mod:`nilpotent.progress`).
 
     Returns
     -------
@@ -95,11 +97,10 @@ def run_audit(
         raise OptionError(f"unknown audit checks {unknown}; known: {', '.join(known)}")
     computed = Computed(content)
     entries: list[AuditEntry] = []
-    for name, check in CHECKS:
-        if only is not None and name not in only:
-            continue
+    chosen = [(name, check) for name, check in CHECKS if only is None or name in only]
+    for done, (name, check) in enumerate(chosen):
         if progress is not None:
-            progress(name)
+            progress(ProgressEvent(name, done, len(chosen)))
         entries.extend(check(content, computed))
     ids = [e.id for e in entries]
     dup = sorted({i for i in ids if ids.count(i) > 1})
