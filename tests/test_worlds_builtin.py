@@ -13,9 +13,9 @@ from nilpotent.errors import WorldError
 from nilpotent.planning.world import builtin_worlds, load_world
 
 
-def test_the_shipped_worlds_are_room_and_parking_and_each_names_itself():
+def test_the_shipped_worlds_are_room_parking_and_corner_and_each_names_itself():
     worlds = builtin_worlds()
-    assert set(worlds) == {"room", "parking"}
+    assert set(worlds) == {"room", "parking", "corner"}
     for name, file in worlds.items():
         assert tomllib.loads(file.read_text("utf-8"))["name"] == name
 
@@ -40,7 +40,7 @@ def test_a_file_of_that_name_wins_over_the_builtin(tmp_path, monkeypatch):
 
 def test_an_unknown_world_names_the_builtin_ones(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    with pytest.raises(WorldError, match=r"not found .*built-in world: parking, room"):
+    with pytest.raises(WorldError, match=r"not found .*built-in world: corner, parking, room"):
         load_world("hall")
 
 

@@ -39,6 +39,7 @@ from nilpotent.cli.plan_options import (
     MaxAccelOpt,
     MaxPieceOpt,
     MaxSpeedOpt,
+    PlannerOpt,
     SeedOpt,
     TimeLimitOpt,
     ToOpt,
@@ -181,6 +182,7 @@ def plan_command(
     anchor: AnchorOpt = "auto",
     max_iterations: MaxItOpt = 30,
     objective: ObjectiveOpt = "reach",
+    planner: PlannerOpt = "rrtconnect",
     refine: RefineOpt = "none",
     max_speed: MaxSpeedOpt = None,
     max_accel: MaxAccelOpt = None,
@@ -193,7 +195,8 @@ def plan_command(
     """Steer MODEL from --from to --to within its limits and around the --world's obstacles.
 
     Small problems are solved by iterated exact steering of nilpotent
-    approximations; otherwise a collision-free path from OMPL (RRTConnect) is
+    approximations; otherwise a collision-free path from OMPL (RRTConnect, or RRT* with
+    --planner rrtstar) is
     steered piece by piece, halving pieces whose motion leaves the free space.
     Every plan is re-simulated densely and checked (clearance, limits, error).
     --json gives the controls as segments (schema nilpotent/plan@1):
@@ -202,6 +205,7 @@ def plan_command(
     from nilpotent.planning.iterative import ANCHORS
     from nilpotent.planning.length import OBJECTIVES
     from nilpotent.planning.ocp import check_refine
+    from nilpotent.planning.optimal_planner import PLANNERS
 
     if not (math.isfinite(tol) and tol > 0):
         raise OptionError(f"--tol must be a positive number, got {tol}")
@@ -213,6 +217,9 @@ def plan_command(
     if objective not in OBJECTIVES:
         raise OptionError(
             f"--objective must be {' or '.join(OBJECTIVES)}; got {literal(objective, 60)!r}")
+    if planner not in PLANNERS:
+        raise OptionError(
+            f"--planner must be {' or '.join(PLANNERS)}; got {literal(planner, 60)!r}")
     check_refine(refine)
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
@@ -236,7 +243,7 @@ def plan_command(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,
             clearance=clearance, objective=objective, refine=refine, max_speed=speed,
-            max_accel=accel, trajectory_step=trajectory_step,
+            max_accel=accel, trajectory_step=trajectory_step, planner=planner,
         )
     write_pictures(result, plot, animate)
     if trajectory_out is not None and result.timed is not None:

@@ -32,7 +32,7 @@ WorldOpt = Annotated[
     Path | None,
     typer.Option("--world", metavar="W",
                  help="World file (workspace bounds and obstacles), or a built-in world's "
-                      "name: room, parking."),
+                      "name: room, parking, corner."),
 ]
 
 LimitOpt = Annotated[
@@ -62,6 +62,14 @@ ClearanceOpt = Annotated[
     typer.Option("--clearance", metavar="D",
                  help="Keep the robot more than D (model length units) from every obstacle.",
                  parser=bounded_float("--clearance", 0.0)),
+]
+
+PlannerOpt = Annotated[
+    str,
+    typer.Option("--planner", metavar="NAME",
+                 help="Holonomic stage: rrtconnect (OMPL RRTConnect, shortest Euclidean path; "
+                      "default) or rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
+                      "anytime)."),
 ]
 
 SeedOpt = Annotated[
@@ -188,7 +196,7 @@ def command_budget(time_limit: float):
 def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
                       max_piece, *, anchor="auto", max_iterations=30, clearance=0.0,
                       objective="reach", refine="none", max_speed=None, max_accel=None,
-                      trajectory_step=None):
+                      trajectory_step=None, planner="rrtconnect"):
     """Load the world, merge the limits and run the global planner (shared with ``execute``)."""
     from nilpotent.planning.global_planner import plan_global
     from nilpotent.planning.world import load_world
@@ -206,5 +214,5 @@ def plan_from_options(system, start, goal, tol, world, limit, singular_margin, t
         singular_margin=singular_margin, time_limit=time_limit, seed=seed,
         max_piece=max_piece, anchor=anchor, max_iterations=max_iterations, clearance=clearance,
         objective=objective, refine=refine, max_speed=max_speed, max_accel=max_accel,
-        trajectory_step=trajectory_step,
+        trajectory_step=trajectory_step, planner=planner,
     )

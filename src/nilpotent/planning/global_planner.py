@@ -61,6 +61,7 @@ from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
 from nilpotent.planning.ocp import Refinement, check_refine, refine_route
+from nilpotent.planning.optimal_planner import HolonomicStage, planner_json
 from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.timing import TimedTrajectory, input_bounds, motion_fields, retime
 from nilpotent.planning.verify import Checker, Verification, verify_segments
@@ -150,6 +151,9 @@ class GlobalPlan(PlanFigure):
     timed:
         The plan re-timed under the input bounds of :func:`plan_global`
         (:func:`~nilpotent.planning.timing.retime`), or ``None`` when none were given.
+    planner, path_cost, cost_history:
+        The holonomic stage (``"rrtconnect"``, ``"rrtstar"``); for ``"rrtstar"`` its path's
+        ball–box cost and the best ``(seconds, cost)`` after each slice.
     """
 
     plan: Plan
@@ -166,6 +170,9 @@ class GlobalPlan(PlanFigure):
     clearance_required: float = 0.0
     refinement: Refinement | None = None
     timed: TimedTrajectory | None = None
+    planner: str = "rrtconnect"
+    path_cost: float | None = None
+    cost_history: tuple[tuple[float, float], ...] = ()
 
     @property
     def error(self) -> float:
@@ -210,6 +217,7 @@ class GlobalPlan(PlanFigure):
             "clearance_required": self.clearance_required,
             "route": self.route,
             "planner_seconds": self.planner_seconds,
+            **planner_json(self.planner, self.path_cost, self.cost_history, reasons),
             "seconds": self.seconds,
             "pieces": [
                 {"target": list(p.target), "first_segment": p.first_segment,
@@ -260,12 +268,15 @@ def shape_held_path(
     seed: int | None,
     valid: Callable[[np.ndarray], np.ndarray],
     held: Sequence[int],
+    path_fn: Callable[..., list[np.ndarray]] = ompl_path,
+    chord: bool = True,
 ) -> list[np.ndarray]:
     """A path that moves the other coordinates with the ``held`` (shape) ones at the start's
     values, then changes the shape to the goal's at the goal's pose (a last straight chord).
 
     OMPL then samples only the body pose (a lower-dimensional, easier query), and the
     steered pieces need no shape correction on the way: only the last piece does.
+    ``path_fn``: the OMPL stage (signature of :func:`ompl_path`); ``chord``: take a free chord.
 
     Raises
     ------
@@ -280,10 +291,10 @@ def shape_held_path(
         raise PlanningError("the goal's pose with the start's shape is not admissible")
     if not _chord_valid(valid, xe, xg):
         raise PlanningError("the shape cannot change at the goal's pose")
-    if _chord_valid(valid, x0, xe):
+    if chord and _chord_valid(valid, x0, xe):
         path = [x0.copy(), xe]
     else:
-        path = ompl_path(checker, x0, xe, seconds, seed, valid=valid, held=held)
+        path = path_fn(checker, x0, xe, seconds, seed, valid=valid, held=held)
     if float(np.linalg.norm(xg - xe)) > 0.0:
         path.append(xg.copy())
     return path
@@ -395,6 +406,7 @@ def plan_global(
     max_accel: float | Sequence[float] | dict[str, float] | None = None,
     trajectory_step: float | None = None,
     settings: IntegrationSettings | None = None,
+    planner: str = "rrtconnect",
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -468,6 +480,8 @@ def plan_global(
     trajectory_step : float or None
         Largest time between the samples of the re-timed motion (default: its
         duration / 500).
+    planner:
+        ``"rrtconnect"`` or ``"rrtstar"`` (:mod:`nilpotent.planning.optimal_planner`).
 
     Raises
     ------
@@ -496,7 +510,7 @@ def plan_global(
             max_piece=max_piece, settings=chosen, direct=direct, anchor=anchor,
             max_iterations=max_iterations, clearance=clearance,
             path_clearance=path_clearance, hold_shape=hold_shape, objective=objective,
-            refine=refine)
+            refine=refine, planner=planner)
         if bounds is None:
             return result
         p = result.plan
@@ -526,6 +540,7 @@ def _plan_global(
     hold_shape: bool,
     objective: str,
     refine: str,
+    planner: str = "rrtconnect",
 ) -> GlobalPlan:
     t0 = time.perf_counter()
     if not (tol > 0 and math.isfinite(tol)):
@@ -550,6 +565,8 @@ def _plan_global(
             f"pieces of --max-piece {max_piece:g}, above the limit of {MAX_PIECES:,} pieces; "
             "raise --max-piece or plan to a nearer goal"
         )
+
+    stage = HolonomicStage(planner, max_piece)  # the OMPL stage (path and its cost)
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
@@ -579,7 +596,8 @@ def _plan_global(
         return GlobalPlan(whole, world, checker.limits, singular_margin,  # type: ignore[arg-type]
                           tuple(tuple(float(c) for c in w) for w in waypoints), tuple(pieces),
                           v, route, planner_s, time_limit, time.perf_counter() - t0,
-                          checker.clearance, None if refinement is None else refinement[1])
+                          checker.clearance, None if refinement is None else refinement[1],
+                          **stage.fields())
 
     # 1. direct attempt (old behaviour)
     near = float(np.linalg.norm(xg - x0)) <= DIRECT_RADIUS
@@ -597,7 +615,7 @@ def _plan_global(
     path_valid = checker.valid
     if world is not None and path_clearance > 0:
         path_valid = _roomy(checker, x0, xg, path_clearance, PATH_END_ZONE)
-    if _chord_valid(path_valid, x0, xg):
+    if planner == "rrtconnect" and _chord_valid(path_valid, x0, xg):
         path = [x0, xg]
     else:
         t_ompl = time.perf_counter()
@@ -608,13 +626,14 @@ def _plan_global(
             budget.check("looking for a path with OMPL")
             seconds = max(0.1, 0.25 * budget.seconds_left())
             try:
-                path = shape_held_path(checker, x0, xg, seconds, seed, path_valid, held)
+                path = shape_held_path(checker, x0, xg, seconds, seed, path_valid, held,
+                                       stage.path, chord=planner == "rrtconnect")
             except PlanningError:
                 path = None
         if path is None:
             budget.check("looking for a path with OMPL")
             seconds = max(0.1, 0.5 * budget.seconds_left())
-            path = ompl_path(checker, x0, xg, seconds, seed, valid=path_valid)
+            path = stage.path(checker, x0, xg, seconds, seed, valid=path_valid)
         planner_s = time.perf_counter() - t_ompl
     pieces_needed = sum(math.ceil(float(np.linalg.norm(b - a)) / max_piece)
                         for a, b in itertools.pairwise(path))

@@ -14,13 +14,13 @@ import numpy as np
 from nilpotent.errors import PlanningError
 from nilpotent.planning.verify import Checker
 
-__all__ = ["SIMPLIFY_SECONDS", "ompl_path"]
+__all__ = ["SIMPLIFY_SECONDS", "box", "ompl_path"]
 
 #: Longest time OMPL's path simplification (shortcutting) may take.
 SIMPLIFY_SECONDS = 0.5
 
 
-def _box(
+def box(
     checker: Checker, x0: np.ndarray, xg: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """The configuration-space box OMPL samples in (limits, world bounds, else around the chord)."""
@@ -77,7 +77,7 @@ def ompl_path(
     if any(x0[j] != xg[j] for j in held_set):
         raise ValueError("held coordinates must agree at the start and the goal")
     free = np.array([j for j in range(full_n) if j not in held_set], dtype=int)
-    lo, hi = _box(checker, x0, xg)
+    lo, hi = box(checker, x0, xg)
     lo, hi = lo[free], hi[free]
     n = len(free)
     space = ob.RealVectorStateSpace(n)

@@ -299,7 +299,7 @@ def world_from_dict(data: Mapping[str, Any], source: str = "<world>") -> World:
 
 
 def builtin_worlds() -> dict[str, Any]:
-    """The example worlds shipped with the package, by name (``room``, ``parking``).
+    """The example worlds shipped with the package, by name (``room``, ``parking``, ``corner``).
 
     Returns
     -------

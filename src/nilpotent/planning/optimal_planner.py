@@ -1,0 +1,382 @@
+r"""Asymptotically optimal holonomic stage: OMPL RRT* under a sub-Riemannian cost (ball–box).
+
+:func:`nilpotent.planning.global_planner.plan_global` with ``planner="rrtstar"``
+finds its configuration-space path with OMPL's RRT* (Karaman & Frazzoli,
+"Sampling-based algorithms for optimal motion planning", IJRR 30(7), 2011)
+instead of RRTConnect, under a cost that measures what the path will cost
+the steering, not its Euclidean length:
+
+**Ball–box cost** (:class:`BallBoxMetric`).  At a regular point ``p`` with an
+adapted frame ``Y_1..Y_n`` of weights ``w_j`` (fields, then brackets:
+:func:`nilpotent.core.analysis.filtration.analyze`), write a displacement
+``q − p = Σ_j z_j Y_j(c)`` in the frame at the midpoint ``c = (p + q)/2``
+(symmetric in ``p``, ``q``).  The ball–box theorem (Bellaïche 1996, Thm 7.34;
+Jean, *Control of Nonholonomic Systems*, 2014, Thm 2.4) gives
+``d(p, q) ≍ Σ_j |z_j|^{1/w_j}`` with constants depending on ``p``; the
+estimate used is
+
+.. math::
+
+    \hat d(p, q) = \Big(\sum_{w_j = 1} z_j^2\Big)^{1/2}
+                   + \sum_{w_j \ge 2} 2\sqrt{\pi}\,|z_j|^{1/w_j},
+
+exact for a horizontal straight motion, and for a pure weight-2 displacement
+of the Heisenberg group (a circle of area ``|z|``: length ``2√(π|z|)``).  A
+sideways step of a car (weight 3) costs ``~|z|^{1/3}``, a step along its
+heading ``|z|``: RRT* prefers paths along which the steered pieces are short.
+It is a cost, not a metric of the configuration space (no triangle inequality
+is claimed); RRT*'s guarantee of convergence to the optimum holds for this
+additive cost over the straight-edge graph it builds.
+
+**Anytime** (:func:`optimal_path`): RRT* runs until its first solution, then
+keeps improving it for ``improve_seconds`` (the cost of the best path after
+each slice is recorded: ``cost_history``, non-increasing since RRT* only
+replaces its solution by a cheaper one).  Its edges are straight chords checked
+by the validity check every ``resolution`` (as RRTConnect's).  The path is then
+cut into pieces and every piece steered and verified on the true system by the
+global planner (nothing here is returned unverified).
+
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from nilpotent.core.model.system import ControlSystem
+from nilpotent.errors import OptionError, PlanningError
+from nilpotent.planning import budget
+from nilpotent.planning.holonomic_path import box, ompl_path
+from nilpotent.planning.verify import Checker
+
+__all__ = [
+    "IMPROVE_FRACTION", "PLANNERS", "BallBoxMetric", "HolonomicStage", "OptimalPath",
+    "ball_box_metric", "optimal_path", "planner_json", "shortcut",
+]
+
+#: Global planners of :func:`~nilpotent.planning.global_planner.plan_global`: the holonomic
+#: stage's OMPL planner.
+PLANNERS = ("rrtconnect", "rrtstar")
+#: The share of its time that RRT* spends improving its first path (:class:`HolonomicStage`).
+IMPROVE_FRACTION = 0.5
+#: Constant of the weight ≥ 2 terms of the ball–box cost (module doc).
+BOX_CONSTANT = 2.0 * math.sqrt(math.pi)
+#: Cost of a motion through a point where the frame is singular (not infinite: OMPL adds it).
+SINGULAR_COST = 1e9
+#: Length of one RRT* slice between two records of the best cost (seconds).
+SLICE_SECONDS = 0.25
+
+
+@dataclass(frozen=True, eq=False)
+class BallBoxMetric:
+    """The ball–box cost estimate of a system (module doc).
+
+    Attributes
+    ----------
+    weights:
+        ``w_j`` of the adapted frame.
+    frame:
+        ``q (N, n) ↦`` the frame values ``(N, n·n)``, column ``j`` of frame field ``Y_{j+1}``
+        in entries ``j·n .. j·n + n − 1``.
+    """
+
+    weights: tuple[int, ...]
+    frame: Callable[[np.ndarray], np.ndarray]
+
+    def __post_init__(self) -> None:
+        w = np.asarray(self.weights)
+        object.__setattr__(self, "_horizontal", w == 1)
+        object.__setattr__(self, "_higher", w > 1)
+        object.__setattr__(self, "_powers", 1.0 / w[w > 1])
+
+    def coordinates(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``z (N, n)`` with ``q − p = Σ_j z_j Y_j((p+q)/2)``; rows ``NaN`` where the frame is
+        singular."""
+        n = len(self.weights)
+        p = np.asarray(p, dtype=float).reshape(-1, n)
+        q = np.asarray(q, dtype=float).reshape(-1, n)
+        f = self.frame(0.5 * (p + q)).reshape(-1, n, n).transpose(0, 2, 1)
+        d = (q - p)[..., None]
+        with np.errstate(all="ignore"):
+            try:
+                z = np.linalg.solve(f, d)[..., 0]
+            except np.linalg.LinAlgError:  # an exactly singular frame: row by row
+                z = np.full(p.shape, np.nan)
+                for i in range(len(p)):
+                    with contextlib.suppress(np.linalg.LinAlgError):
+                        z[i] = np.linalg.solve(f[i], d[i])[:, 0]
+        z[~np.isfinite(z).all(axis=1)] = np.nan
+        return z
+
+    def cost(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``d̂(p, q)`` for rows of ``p``, ``q`` ``(N, n)`` (:data:`SINGULAR_COST` where the
+        frame is singular)."""
+        z = self.coordinates(p, q)
+        horizontal = np.sqrt((z[:, self._horizontal] ** 2).sum(axis=1))  # type: ignore[attr-defined]
+        higher = (BOX_CONSTANT * np.abs(z[:, self._higher])  # type: ignore[attr-defined]
+                  ** self._powers).sum(axis=1)  # type: ignore[attr-defined]
+        out = horizontal + higher
+        return np.where(np.isfinite(out), out, SINGULAR_COST)
+
+    def edge_cost(self, p: np.ndarray, q: np.ndarray, piece: float) -> float:
+        """The cost of the chord ``p → q`` cut into ``k = ⌈‖q − p‖ / piece⌉`` equal pieces
+        (as the global planner steers it): the sum of their :meth:`cost`."""
+        k = max(1, math.ceil(math.dist(p, q) / piece))
+        t = np.arange(k + 1, dtype=float)[:, None] / k
+        pts = p + t * (q - p)
+        return float(np.sum(self.cost(pts[:-1], pts[1:])))
+
+
+@lru_cache(maxsize=16)
+def _metric(system: ControlSystem, point: tuple[sp.Expr, ...]) -> BallBoxMetric:
+    from nilpotent.core.analysis.filtration import analyze
+    from nilpotent.core.lie.brackets import word_field
+    from nilpotent.numeric.compile import compile_map
+
+    filt = analyze(system, point)
+    if not filt.bracket_generating or len(filt.frame) != system.n:
+        raise PlanningError(
+            f"{system.name} is not bracket generating at the start: no sub-Riemannian cost "
+            "for --planner rrtstar")
+    exprs = [e for word in filt.frame for e in word_field(system, word)]
+    params: dict[str | sp.Symbol, Any] = {sp.Symbol(k): v for k, v in system.parameters}
+    frame = compile_map(system.coordinates, exprs, params, name=f"{system.name}-frame",
+                        outputs=len(exprs))
+    return BallBoxMetric(tuple(int(w) for w in filt.weights), frame)
+
+
+def ball_box_metric(system: ControlSystem, point: Sequence[float] | np.ndarray) -> BallBoxMetric:
+    """The ball–box cost of ``system`` with the adapted frame chosen at ``point`` (cached).
+
+    Raises
+    ------
+    PlanningError
+        The system is not bracket generating at ``point``.
+    """
+    exact = tuple(sp.Rational(repr(float(v))) for v in point)
+    return _metric(system, exact)
+
+
+@dataclass(frozen=True)
+class OptimalPath:
+    """RRT*'s path and how its cost went down.
+
+    Attributes
+    ----------
+    points:
+        The path's vertices (model coordinates), start and goal included.
+    cost:
+        Its ball–box cost (sum over the edges).
+    cost_history:
+        ``(seconds since RRT* started, best cost)`` after each slice with a solution.
+    """
+
+    points: tuple[tuple[float, ...], ...]
+    cost: float
+    cost_history: tuple[tuple[float, float], ...]
+
+
+def optimal_path(
+    checker: Checker,
+    x0: np.ndarray,
+    xg: np.ndarray,
+    seconds: float,
+    seed: int | None = None,
+    resolution: float = 0.05,
+    valid: Callable[[np.ndarray], np.ndarray] | None = None,
+    held: Sequence[int] = (),
+    improve_seconds: float | None = None,
+    piece: float = 1.0,
+) -> OptimalPath:
+    """A collision-free path from OMPL RRT* under the ball–box cost (module doc).
+
+    Parameters as :func:`~nilpotent.planning.holonomic_path.ompl_path`; ``seconds``
+    bounds the search for a first solution and its improvement together, and
+    ``improve_seconds`` (default: all of ``seconds``) the improvement after the first;
+    ``piece``: an edge costs the sum of the ball–box costs of the pieces of at most this
+    length it will be cut into (:meth:`BallBoxMetric.edge_cost`; the ball–box estimate
+    holds for short displacements only: one long edge would under-cost a sideways motion).
+
+    Raises
+    ------
+    PlanningError
+        No exact solution within ``seconds``.
+    """
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    if seed is not None:
+        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
+    metric = ball_box_metric(checker.system, x0)
+    held_set = {int(j) for j in held}
+    if any(x0[j] != xg[j] for j in held_set):
+        raise ValueError("held coordinates must agree at the start and the goal")
+    free = np.array([j for j in range(len(x0)) if j not in held_set], dtype=int)
+    lo, hi = box(checker, x0, xg)
+    lo, hi = lo[free], hi[free]
+    n = len(free)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for j in range(n):
+        bounds.setLow(j, float(lo[j]))
+        bounds.setHigh(j, float(hi[j]))
+    space.setBounds(bounds)
+    si = ob.SpaceInformation(space)
+    is_valid = checker.valid if valid is None else valid
+
+    def embed(state: Any) -> np.ndarray:
+        q = x0.astype(float).copy()
+        q[free] = [state[j] for j in range(n)]
+        return q
+
+    si.setStateValidityChecker(lambda s: bool(is_valid(embed(s)[None, :])[0]))
+    extent = float(np.linalg.norm(hi - lo))
+    si.setStateValidityCheckingResolution(min(0.05, resolution / max(extent, 1e-12)))
+    si.setup()
+
+    class Objective(ob.OptimizationObjective):
+        def __init__(self, info: Any) -> None:
+            super().__init__(info)
+
+        def stateCost(self, s: Any) -> Any:
+            return ob.Cost(0.0)
+
+        def motionCost(self, s1: Any, s2: Any) -> Any:
+            return ob.Cost(metric.edge_cost(embed(s1), embed(s2), piece))
+
+    objective = Objective(si)
+    pdef = ob.ProblemDefinition(si)
+    start, goal = space.allocState(), space.allocState()
+    for j in range(n):
+        start[j], goal[j] = float(x0[free[j]]), float(xg[free[j]])  # pyright: ignore[reportIndexIssue]
+    pdef.setStartAndGoalStates(start, goal)
+    pdef.setOptimizationObjective(objective)
+    planner = og.RRTstar(si)
+    planner.setProblemDefinition(pdef)
+    planner.setup()
+    t0 = time.perf_counter()
+    history: list[tuple[float, float]] = []
+    first: float | None = None
+    improve = seconds if improve_seconds is None else improve_seconds
+    try:
+        while True:
+            spent = time.perf_counter() - t0
+            left = seconds - spent
+            if first is not None:
+                left = min(left, first + improve - spent)
+            if left <= 0:
+                break
+            budget.check("looking for a path with OMPL RRT*")
+            planner.solve(float(min(SLICE_SECONDS, left)))
+            if pdef.hasExactSolution():
+                now = time.perf_counter() - t0
+                first = now if first is None else first
+                history.append((now, float(planner.bestCost().value())))
+        if first is None:
+            raise PlanningError(
+                f"no collision-free path from OMPL RRT* within {seconds:.3g} s; raise "
+                "--time-limit, or check that start and goal are connected in the free space")
+        path: Any = pdef.getSolutionPath()  # a geometric path (the stubs say Path)
+        pts = [embed(path.getState(i)) for i in range(path.getStateCount())]
+    finally:
+        # break the references between Python objects and OMPL's (no leak at exit)
+        planner.clear()
+        pdef.clearSolutionPaths()
+        del planner, pdef, objective
+    pts[0], pts[-1] = x0.copy(), xg.copy()
+    pts = shortcut(pts, metric, piece, is_valid, resolution)
+    cost = float(sum(metric.edge_cost(a, b, piece) for a, b in itertools.pairwise(pts)))
+    if history and cost < history[-1][1]:
+        history.append((time.perf_counter() - t0, cost))
+    return OptimalPath(tuple(tuple(float(c) for c in p) for p in pts), cost, tuple(history))
+
+
+def shortcut(
+    points: Sequence[np.ndarray], metric: BallBoxMetric, piece: float,
+    valid: Callable[[np.ndarray], np.ndarray], resolution: float,
+) -> list[np.ndarray]:
+    """The cheapest path through a subsequence of ``points`` whose chords are valid (ball–box
+    cost of :meth:`BallBoxMetric.edge_cost`): dynamic programming over the ``O(n²)`` chords,
+    a chord checked only when it would improve the best cost to its end; the path's own
+    edges are kept as they are (valid already)."""
+    pts = [np.asarray(p, dtype=float) for p in points]
+    n = len(pts)
+    best = [0.0] + [math.inf] * (n - 1)
+    back = [0] * n
+    for j in range(1, n):
+        budget.check("shortcutting the path of OMPL RRT*")
+        best[j] = best[j - 1] + metric.edge_cost(pts[j - 1], pts[j], piece)
+        back[j] = j - 1
+        for i in range(j - 1):
+            c = best[i] + metric.edge_cost(pts[i], pts[j], piece)
+            if c < best[j] and _chord(valid, pts[i], pts[j], resolution):
+                best[j], back[j] = c, i
+    out, j = [pts[-1]], n - 1
+    while j > 0:
+        j = back[j]
+        out.append(pts[j])
+    return out[::-1]
+
+
+def _chord(valid: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarray,
+           step: float) -> bool:
+    k = max(2, math.ceil(float(np.linalg.norm(b - a)) / step) + 1)
+    t = np.linspace(0.0, 1.0, k)[:, None]
+    return bool(np.all(valid(a + t * (b - a))))
+
+
+class HolonomicStage:
+    """The holonomic stage of :func:`~nilpotent.planning.global_planner.plan_global` for a
+    planner of :data:`PLANNERS`: :meth:`path` has the signature of
+    :func:`~nilpotent.planning.holonomic_path.ompl_path` (``seconds`` its 4th argument);
+    for ``"rrtstar"`` it runs :func:`optimal_path` (improving for :data:`IMPROVE_FRACTION`
+    of its time, edges cut into pieces of ``piece``) and keeps each result in ``found``.
+
+    Raises
+    ------
+    OptionError
+        An unknown planner.
+    """
+
+    def __init__(self, planner: str, piece: float) -> None:
+        if planner not in PLANNERS:
+            raise OptionError(f"unknown planner {planner!r} (choose from {', '.join(PLANNERS)})")
+        self.planner, self.piece = planner, piece
+        self.found: list[OptimalPath] = []
+
+    def path(self, *args: Any, **kwargs: Any) -> list[np.ndarray]:
+        """The path from OMPL (RRTConnect, or RRT* under the ball–box cost)."""
+        if self.planner == "rrtconnect":
+            return ompl_path(*args, **kwargs)
+        best = optimal_path(*args, **kwargs, improve_seconds=IMPROVE_FRACTION * args[3],
+                            piece=self.piece)
+        self.found.append(best)
+        return [np.array(p) for p in best.points]
+
+    def fields(self) -> dict[str, Any]:
+        """``planner``, ``path_cost``, ``cost_history`` of the last path (for ``GlobalPlan``)."""
+        last = self.found[-1] if self.found else None
+        return {"planner": self.planner, "path_cost": None if last is None else last.cost,
+                "cost_history": () if last is None else last.cost_history}
+
+
+def planner_json(planner: str, path_cost: float | None,
+                 cost_history: Sequence[tuple[float, float]],
+                 reasons: dict[str, str]) -> dict[str, Any]:
+    """The plan JSON's ``planner``, ``path_cost``, ``cost_history`` (the reason of a ``null``
+    ``path_cost`` added to ``reasons``)."""
+    if path_cost is None:
+        reasons["path_cost"] = "the holonomic stage (rrtconnect, or none) has no cost"
+    return {"planner": planner, "path_cost": path_cost,
+            "cost_history": [list(c) for c in cost_history]}
