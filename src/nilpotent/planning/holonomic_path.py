@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -14,7 +15,7 @@ import numpy as np
 from nilpotent.errors import PlanningError
 from nilpotent.planning.verify import Checker
 
-__all__ = ["SIMPLIFY_SECONDS", "box", "ompl_path"]
+__all__ = ["SIMPLIFY_SECONDS", "ConfigurationSpace", "box", "configuration_space", "ompl_path"]
 
 #: Longest time OMPL's path simplification (shortcutting) may take.
 SIMPLIFY_SECONDS = 0.5
@@ -42,6 +43,79 @@ def box(
     return lo, hi
 
 
+@dataclass(frozen=True)
+class ConfigurationSpace:
+    """OMPL's real-vector space of the sampled coordinates, with its validity check.
+
+    ``info`` is the set-up ``ompl.base.SpaceInformation`` (validity checker: the
+    checker's, or ``valid``; checking resolution from ``resolution``); ``free`` the
+    indices of the coordinates OMPL samples, the others held at ``x0``'s values.
+    """
+
+    space: Any
+    info: Any
+    free: np.ndarray
+    x0: np.ndarray
+
+    def embed(self, state: Any) -> np.ndarray:
+        """The configuration (model coordinates) of an OMPL state."""
+        q = self.x0.astype(float).copy()
+        q[self.free] = [state[j] for j in range(len(self.free))]
+        return q
+
+    def endpoints(self, xg: np.ndarray) -> tuple[Any, Any]:
+        """OMPL states of ``x0`` and ``xg``."""
+        start, goal = self.space.allocState(), self.space.allocState()
+        for j, k in enumerate(self.free):
+            start[j], goal[j] = float(self.x0[k]), float(xg[k])
+        return start, goal
+
+
+def configuration_space(
+    checker: Checker,
+    x0: np.ndarray,
+    xg: np.ndarray,
+    resolution: float,
+    valid: Callable[[np.ndarray], np.ndarray] | None,
+    held: Sequence[int],
+    seed: int | None,
+) -> ConfigurationSpace:
+    """The OMPL space both planners search (:func:`ompl_path`'s parameters).
+
+    Raises
+    ------
+    ValueError
+        Held coordinates that differ between ``x0`` and ``xg``.
+    """
+    from ompl import base as ob
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    if seed is not None:
+        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
+    held_set = {int(j) for j in held}
+    if any(x0[j] != xg[j] for j in held_set):
+        raise ValueError("held coordinates must agree at the start and the goal")
+    free = np.array([j for j in range(len(x0)) if j not in held_set], dtype=int)
+    lo, hi = box(checker, x0, xg)
+    lo, hi = lo[free], hi[free]
+    n = len(free)
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for j in range(n):
+        bounds.setLow(j, float(lo[j]))
+        bounds.setHigh(j, float(hi[j]))
+    space.setBounds(bounds)
+    info = ob.SpaceInformation(space)
+    is_valid = checker.valid if valid is None else valid
+    cs = ConfigurationSpace(space, info, free, np.asarray(x0, dtype=float))
+    info.setStateValidityChecker(lambda st: bool(is_valid(cs.embed(st)[None, :])[0]))
+    extent = float(np.linalg.norm(hi - lo))
+    info.setStateValidityCheckingResolution(min(0.05, resolution / max(extent, 1e-12)))
+    info.setup()
+    return cs
+
+
 def ompl_path(
     checker: Checker,
     x0: np.ndarray,
@@ -65,49 +139,11 @@ def ompl_path(
     PlanningError
         No exact solution within ``seconds``.
     """
-    from ompl import base as ob
     from ompl import geometric as og
-    from ompl import util as ou
 
-    ou.setLogLevel(ou.LogLevel.LOG_NONE)
-    if seed is not None:
-        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
-    full_n = len(x0)
-    held_set = set(int(j) for j in held)
-    if any(x0[j] != xg[j] for j in held_set):
-        raise ValueError("held coordinates must agree at the start and the goal")
-    free = np.array([j for j in range(full_n) if j not in held_set], dtype=int)
-    lo, hi = box(checker, x0, xg)
-    lo, hi = lo[free], hi[free]
-    n = len(free)
-    space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    for j in range(n):
-        bounds.setLow(j, float(lo[j]))
-        bounds.setHigh(j, float(hi[j]))
-    space.setBounds(bounds)
-    setup = og.SimpleSetup(space)
-
-    is_valid = checker.valid if valid is None else valid
-
-    def embed(values: Sequence[float]) -> np.ndarray:
-        q = x0.astype(float).copy()
-        q[free] = values
-        return q
-
-    def state_valid(state: Any) -> bool:
-        q = embed([state[j] for j in range(n)])
-        return bool(is_valid(q[None, :])[0])
-
-    setup.setStateValidityChecker(state_valid)
-    extent = float(np.linalg.norm(hi - lo))
-    setup.getSpaceInformation().setStateValidityCheckingResolution(
-        min(0.05, resolution / max(extent, 1e-12))
-    )
-    start, goal = space.allocState(), space.allocState()
-    # OMPL's stubs type allocState() as the abstract State; a real-vector state is indexable
-    for j in range(n):
-        start[j], goal[j] = float(x0[free[j]]), float(xg[free[j]])  # pyright: ignore[reportIndexIssue]
+    cs = configuration_space(checker, x0, xg, resolution, valid, held, seed)
+    setup = og.SimpleSetup(cs.info)
+    start, goal = cs.endpoints(xg)
     setup.setStartAndGoalStates(start, goal)
     setup.setPlanner(og.RRTConnect(setup.getSpaceInformation()))
     status = setup.solve(float(seconds))
@@ -121,6 +157,6 @@ def ompl_path(
     setup.simplifySolution(float(min(SIMPLIFY_SECONDS, seconds)))
     path = setup.getSolutionPath()
     states = [path.getState(i) for i in range(path.getStateCount())]
-    pts = [embed([s[j] for j in range(n)]) for s in states]  # pyright: ignore[reportIndexIssue]
+    pts = [cs.embed(st) for st in states]
     pts[0], pts[-1] = x0.copy(), xg.copy()
     return pts

@@ -55,7 +55,7 @@ import sympy as sp
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PlanningError
 from nilpotent.planning import budget
-from nilpotent.planning.holonomic_path import box, ompl_path
+from nilpotent.planning.holonomic_path import configuration_space, ompl_path
 from nilpotent.planning.verify import Checker
 
 __all__ = [
@@ -213,37 +213,11 @@ def optimal_path(
     """
     from ompl import base as ob
     from ompl import geometric as og
-    from ompl import util as ou
 
-    ou.setLogLevel(ou.LogLevel.LOG_NONE)
-    if seed is not None:
-        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
     metric = ball_box_metric(checker.system, x0)
-    held_set = {int(j) for j in held}
-    if any(x0[j] != xg[j] for j in held_set):
-        raise ValueError("held coordinates must agree at the start and the goal")
-    free = np.array([j for j in range(len(x0)) if j not in held_set], dtype=int)
-    lo, hi = box(checker, x0, xg)
-    lo, hi = lo[free], hi[free]
-    n = len(free)
-    space = ob.RealVectorStateSpace(n)
-    bounds = ob.RealVectorBounds(n)
-    for j in range(n):
-        bounds.setLow(j, float(lo[j]))
-        bounds.setHigh(j, float(hi[j]))
-    space.setBounds(bounds)
-    si = ob.SpaceInformation(space)
+    cs = configuration_space(checker, x0, xg, resolution, valid, held, seed)
+    si, embed = cs.info, cs.embed
     is_valid = checker.valid if valid is None else valid
-
-    def embed(state: Any) -> np.ndarray:
-        q = x0.astype(float).copy()
-        q[free] = [state[j] for j in range(n)]
-        return q
-
-    si.setStateValidityChecker(lambda s: bool(is_valid(embed(s)[None, :])[0]))
-    extent = float(np.linalg.norm(hi - lo))
-    si.setStateValidityCheckingResolution(min(0.05, resolution / max(extent, 1e-12)))
-    si.setup()
 
     class Objective(ob.OptimizationObjective):
         def __init__(self, info: Any) -> None:
@@ -257,9 +231,7 @@ def optimal_path(
 
     objective = Objective(si)
     pdef = ob.ProblemDefinition(si)
-    start, goal = space.allocState(), space.allocState()
-    for j in range(n):
-        start[j], goal[j] = float(x0[free[j]]), float(xg[free[j]])  # pyright: ignore[reportIndexIssue]
+    start, goal = cs.endpoints(xg)
     pdef.setStartAndGoalStates(start, goal)
     pdef.setOptimizationObjective(objective)
     planner = og.RRTstar(si)
