@@ -215,3 +215,29 @@ def test_a_refined_motion_through_an_obstacle_is_refused() -> None:
     assert not info.applied and "not admissible" in info.reason and "obstacle" in info.reason
     assert segs == warm
     assert info.length_refined == pytest.approx(6.0, rel=1e-6)  # the straight drive
+
+
+@needs_casadi
+def test_a_refinement_that_spends_the_time_limit_keeps_the_plan(monkeypatch) -> None:
+    """A refinement that runs until the hard deadline (as its own verification may) and is
+    stopped there: the plan found before it is returned, verified, not a time-limit error
+    (it used to be re-verified after the refinement, with no time left)."""
+    import time
+
+    from nilpotent.planning import budget, ocp
+
+    def slow(*args, **kwargs):
+        while budget.seconds_left(hard=True) > 0:
+            time.sleep(0.05)
+        budget.check("refining (test)", True)  # raises ComputationLimitError
+        raise AssertionError("the budget did not stop the refinement")
+
+    monkeypatch.setattr(ocp, "refine_segments", slow)
+    h = get_model("heisenberg")
+    goal = (0.2, 0.1, 0.05)
+    g = plan_global(h, (0, 0, 0), goal, time_limit=4.0, refine="ocp")
+    assert g.refinement is not None and not g.refinement.applied
+    assert "time limit" in g.refinement.reason
+    data = json.loads(json.dumps(g.to_json(), allow_nan=False))
+    states = resimulate(h, (0, 0, 0), data["segments"])
+    assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-8
