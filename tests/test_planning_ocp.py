@@ -241,3 +241,21 @@ def test_a_refinement_that_spends_the_time_limit_keeps_the_plan(monkeypatch) -> 
     data = json.loads(json.dumps(g.to_json(), allow_nan=False))
     states = resimulate(h, (0, 0, 0), data["segments"])
     assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-8
+
+
+def test_a_limit_violation_below_the_printed_digits_says_by_how_much() -> None:
+    # y = 0.2 + 1e-13 against y <= 0.2: "0.2 outside [0, 0.2]" alone reads as no violation
+    checker = Checker(get_model("unicycle"), limits=Limits((("y", 0.0, 0.2),)))
+    why = checker.why_invalid(np.array([0.0, 0.2 + 1e-13, 0.0]))
+    assert "outside [0, 0.2] (by 1e-13)" in why
+    assert "(by" not in checker.why_invalid(np.array([0.0, 0.5, 0.0]))  # 0.5 shows it
+
+
+@needs_casadi
+def test_no_controls_to_refine_says_the_start_is_within_tol() -> None:
+    # a start within --tol of a different goal: the plan has no segments; start and goal
+    # do not coincide, so the reason must not say they do
+    h = get_model("heisenberg")
+    segs, info = refine_segments(Checker(h), (0, 0, 0), (0.1, 0, 0), [], 0.5)
+    assert segs == [] and not info.applied
+    assert "within tol" in info.reason and "coincide" not in info.reason
