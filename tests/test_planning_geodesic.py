@@ -216,6 +216,20 @@ def test_control_length_of_a_circle() -> None:
     assert control_length([seg, lin]) == pytest.approx(3.0 + 2.5, rel=1e-12)
 
 
+@pytest.mark.parametrize("eps", [1e-1, 1e-2, 1e-3, 0.0])
+def test_control_length_where_the_speed_nearly_vanishes(eps: float) -> None:
+    # u = (cos t, ε) on [0, 2π]: ‖u‖ has near-kinks at t = π/2, 3π/2, where a fixed
+    # Gauss rule erred by 4e-5 (ε = 1e-2).  Exact: ∫₀^{2π} √(ε² + cos²t) dt
+    # = 4√(1 + ε²)·E(1/(1 + ε²)), E the complete elliptic integral (parameter m)
+    from scipy.special import ellipe
+
+    from nilpotent.numeric.signals import InputSignal, Segment
+
+    seg = Segment(2 * math.pi, 1.0, (InputSignal(0.0, (1.0,)), InputSignal(eps)))
+    exact = 4 * math.sqrt(1 + eps**2) * float(ellipe(1 / (1 + eps**2)))
+    assert control_length([seg]) == pytest.approx(exact, rel=1e-10)
+
+
 def test_step_3_is_refused_with_a_clear_error() -> None:
     y = sp.symbols("y1:5")
     engel = TriangularSystem.from_fields(

@@ -215,3 +215,47 @@ def test_a_refined_motion_through_an_obstacle_is_refused() -> None:
     assert not info.applied and "not admissible" in info.reason and "obstacle" in info.reason
     assert segs == warm
     assert info.length_refined == pytest.approx(6.0, rel=1e-6)  # the straight drive
+
+
+@needs_casadi
+def test_a_refinement_that_spends_the_time_limit_keeps_the_plan(monkeypatch) -> None:
+    """A refinement that runs until the hard deadline (as its own verification may) and is
+    stopped there: the plan found before it is returned, verified, not a time-limit error
+    (it used to be re-verified after the refinement, with no time left)."""
+    import time
+
+    from nilpotent.planning import budget, ocp
+
+    def slow(*args, **kwargs):
+        while budget.seconds_left(hard=True) > 0:
+            time.sleep(0.05)
+        budget.check("refining (test)", True)  # raises ComputationLimitError
+        raise AssertionError("the budget did not stop the refinement")
+
+    monkeypatch.setattr(ocp, "refine_segments", slow)
+    h = get_model("heisenberg")
+    goal = (0.2, 0.1, 0.05)
+    g = plan_global(h, (0, 0, 0), goal, time_limit=4.0, refine="ocp")
+    assert g.refinement is not None and not g.refinement.applied
+    assert "time limit" in g.refinement.reason
+    data = json.loads(json.dumps(g.to_json(), allow_nan=False))
+    states = resimulate(h, (0, 0, 0), data["segments"])
+    assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-8
+
+
+def test_a_limit_violation_below_the_printed_digits_says_by_how_much() -> None:
+    # y = 0.2 + 1e-13 against y <= 0.2: "0.2 outside [0, 0.2]" alone reads as no violation
+    checker = Checker(get_model("unicycle"), limits=Limits((("y", 0.0, 0.2),)))
+    why = checker.why_invalid(np.array([0.0, 0.2 + 1e-13, 0.0]))
+    assert "outside [0, 0.2] (by 1e-13)" in why
+    assert "(by" not in checker.why_invalid(np.array([0.0, 0.5, 0.0]))  # 0.5 shows it
+
+
+@needs_casadi
+def test_no_controls_to_refine_says_the_start_is_within_tol() -> None:
+    # a start within --tol of a different goal: the plan has no segments; start and goal
+    # do not coincide, so the reason must not say they do
+    h = get_model("heisenberg")
+    segs, info = refine_segments(Checker(h), (0, 0, 0), (0.1, 0, 0), [], 0.5)
+    assert segs == [] and not info.applied
+    assert "within tol" in info.reason and "coincide" not in info.reason

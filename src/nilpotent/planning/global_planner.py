@@ -570,12 +570,13 @@ def _plan_global(
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:
+        # the plan found is verified before any refinement, so that a refinement that
+        # runs the time limit out leaves a plan to return (the final check needs time too)
+        v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, settings)
         refinement = refine_route(refine, checker, x0, xg, segments, tol, settings)
-        v = None
         if refinement is not None and refinement[1].applied:
             segments, v = refinement[0], refinement[1].verification  # verified as below
-        if v is None:
-            v = verify_segments(checker, x0, segments, xg, VERIFY_POINTS, settings)
+        assert v is not None
         if not v.admissible:
             raise PlanningError(
                 "the re-simulated plan is not admissible (clearance "

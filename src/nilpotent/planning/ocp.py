@@ -470,7 +470,7 @@ def refine_segments(
                                           seconds=time.perf_counter() - t0, **more)
 
     if not segments:
-        return keep("the plan has no controls (start and goal coincide)")
+        return keep("the plan has no controls (the start is within tol of the goal)")
     budget.check("refining the plan by optimal control")
     u0 = _warm_controls(segments, intervals, system.m)
     u, status, its, step = _solve(ca, system, checker, x0, xg, u0, intervals)

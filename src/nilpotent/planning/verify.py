@@ -176,11 +176,11 @@ class Checker:
         if lim < 0:
             names = self.system.coordinate_names
             assert self.limits is not None
-            bad = [f"{k} = {q[names.index(k)]:.4g} outside [{lo:.4g}, {hi:.4g}]"
+            bad = [_outside(k, q[names.index(k)], lo, hi)
                    for k, lo, hi in self.limits.bounds
                    if not lo <= q[names.index(k)] <= hi]
             g = self.robot.relative_values(np.asarray(q, dtype=float)[None, :])[0]  # type: ignore[attr-defined]
-            bad += [f"{label} = {v:.4g} outside [{lo:.4g}, {hi:.4g}]"
+            bad += [_outside(label, v, lo, hi)
                     for (label, _, lo, hi), v in zip(self.limits.relative, g, strict=True)
                     if not lo <= v <= hi]
             reasons.append("limits violated: " + ", ".join(bad))
@@ -273,6 +273,14 @@ def verify_states(
         self_clearance=float(self_clear.min()) if self_clear is not None else None,
         self_collision_ok=bool(self_clear is None or np.all(self_clear > 0)),
     )
+
+
+def _outside(label: str, v: float, lo: float, hi: float) -> str:
+    """``"x = 0.2 outside [0, 0.2]"``, with by how much when 4 digits do not show it."""
+    text = f"{label} = {v:.4g} outside [{lo:.4g}, {hi:.4g}]"
+    if f"{v:.4g}" in (f"{lo:.4g}", f"{hi:.4g}"):
+        text += f" (by {max(lo - v, v - hi):.2g})"
+    return text
 
 
 def verify_segments(
