@@ -212,9 +212,9 @@ class Equations:
 
 @dataclass(frozen=True)
 class Table:
-    """A table: ``headers`` (plain text) and rows of plain-text or :class:`Math` cells."""
+    """A table: ``headers`` and rows of plain-text or :class:`Math` cells."""
 
-    headers: tuple[str, ...]
+    headers: tuple[str | Math, ...]
     rows: tuple[tuple[str | Math, ...], ...]
 
 
@@ -246,7 +246,7 @@ class Display:
                 rows += [f"{lhs} &= {rhs}" for lhs, rhs in block.rows]
             else:
                 spec = "l" * len(block.headers)
-                head = " & ".join(_text_latex(h) for h in block.headers)
+                head = " & ".join(_cell_latex(h) for h in block.headers)
                 body = "".join(
                     r" \\ " + " & ".join(_cell_latex(c) for c in row) for row in block.rows
                 )
@@ -269,7 +269,7 @@ class Display:
                     + "</table>"
                 )
             else:
-                head = "".join(f"<th>{html.escape(h)}</th>" for h in block.headers)
+                head = "".join(f"<th>{_cell_html(h)}</th>" for h in block.headers)
                 body = "".join(
                     "<tr>" + "".join(f"<td>{_cell_html(c)}</td>" for c in row) + "</tr>"
                     for row in block.rows
@@ -333,7 +333,8 @@ def filtration_display(filtration: Any) -> Display:
             ),
             Text(f"{kind}, {generating}; generic growth vector "
                  f"{tuple(filtration.generic_growth_vector)}"),
-            Table(("j", "weight w_j", "word Y_j", "Y_j(p)"), rows),
+            Table((Math("j"), Math(r"\text{weight } w_j"), Math(r"\text{word } Y_j"),
+                   Math("Y_j(p)")), rows),
         ),
     )
 
@@ -350,7 +351,8 @@ def privileged_display(coordinates: Any) -> Display:
     )
     blocks: list[Block] = [
         Text(f"{coordinates.method} privileged coordinates; the orders are computed"),
-        Table(("y_j", "weight w_j", "computed order", "y_j as a function of x"), rows),
+        Table((Math("y_j"), Math(r"\text{weight } w_j"), "computed order",
+               Math(r"y_j \text{ as a function of } x")), rows),
         Text("inverse" + ("" if coordinates.inverse_exact
                           else f" (truncated at weighted degree {coordinates.inverse_order})")),
         Equations(
