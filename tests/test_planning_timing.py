@@ -267,3 +267,26 @@ def test_bad_trajectory_options_exit_2(run_cli, args, message, tmp_path, monkeyp
     assert message in out + err
     assert "Traceback" not in out + err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_plan_that_does_not_move_re_times_to_one_sample_at_rest(run_cli, tmp_path):
+    """Goal = start: the plan verifies without bounds, so with bounds it must too (it
+    was refused, exit 2); the motion that stays put is one sample at rest, at the goal."""
+    out_csv = tmp_path / "rest.csv"
+    status, out, err = run_cli(
+        "plan", "unicycle", "--from", "x=1/4", "--to", "x=1/4", "--max-speed", "1",
+        "--max-accel", "1", "--trajectory-out", str(out_csv), "--json")
+    assert status == 0, err
+    data = json.loads(out)
+    traj = data["trajectory"]
+    assert traj["t"] == [0.0] and traj["duration"] == 0.0
+    assert traj["x"] == [[0.25, 0.0, 0.0]] and traj["u"] == [[0.0, 0.0]]
+    rows = list(csv.reader(io.StringIO(out_csv.read_text(encoding="utf-8"))))
+    assert [float(v) for v in rows[1]] == [0.0, 0.25, 0.0, 0.0, 0.0, 0.0]
+    # every input 0 (segments that do not move): the same, in the Python API
+    unicycle = nil.get_model("unicycle")
+    still = Segment(1.0, 2 * math.pi, (InputSignal(0.0), InputSignal(0.0)))
+    timed = retime(unicycle, [0.1, 0.2, 0.3], [still, still],
+                   InputBounds((1.0, 1.0), (1.0, 1.0)))
+    assert timed.times.tolist() == [0.0] and timed.inputs.tolist() == [[0.0, 0.0]]
+    assert timed.states.tolist() == [[0.1, 0.2, 0.3]]

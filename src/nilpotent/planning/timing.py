@@ -498,6 +498,7 @@ def retime(
     ------
     OptionError
         Segments of another number of inputs than ``bounds``, a bad ``step``.
+        (A plan without segments, or whose inputs are all 0, gives one sample at rest.)
     ComputationLimitError
         More than :data:`MAX_SAMPLES` samples or :data:`MAX_GRID` grid points.
     PlanningError
@@ -506,13 +507,13 @@ def retime(
         The re-simulation fails, or ends away from ``reached``.
     """
     segs = tuple(segments)
-    if not segs:
-        raise OptionError("a plan without segments cannot be re-timed")
+    if step is not None and not (math.isfinite(step) and step > 0):
+        raise OptionError(f"the trajectory step must be a positive number, got {step}")
+    if not segs:  # the goal is the start: the motion is one sample at rest
+        return _at_rest(system, start, 0.0, bounds, reached)
     m = segs[0].m
     if len(bounds.speed) != m or len(bounds.accel) != m:
         raise OptionError(f"bounds for {len(bounds.accel)} inputs, the plan has {m}")
-    if step is not None and not (math.isfinite(step) and step > 0):
-        raise OptionError(f"the trajectory step must be a positive number, got {step}")
     starts = np.concatenate([[0.0], np.cumsum([s.duration for s in segs])])
     grid_points = sum(GRID_PER_SEGMENT * max(1, max(i.harmonics for i in s.inputs)) for s in segs)
     if grid_points > MAX_GRID:
@@ -531,8 +532,8 @@ def retime(
             continue
         profiles.append((starts[a], starts[b], _profile(piece, starts[a:b + 1], bounds)))
     moving_profiles = [p for _, _, p in profiles if p is not None]
-    if not moving_profiles:
-        raise OptionError("the plan does not move (every input is 0): nothing to re-time")
+    if not moving_profiles:  # every input is 0: the plan stays where it starts
+        return _at_rest(system, start, float(starts[-1]), bounds, reached)
     total = sum(p.duration * p.unit_time * p.slowdown for p in moving_profiles)
     if step is None:
         step = total / DEFAULT_SAMPLES
@@ -585,6 +586,22 @@ def retime(
     s_all.setflags(write=False)
     return TimedTrajectory(t_all, states, u_all, acc, s_all, tuple(stops), bounds,
                            tuple(system.coordinate_names))
+
+
+def _at_rest(system: ControlSystem, start: Sequence[float] | State, plan_time: float,
+             bounds: InputBounds, reached: Sequence[float] | None) -> TimedTrajectory:
+    """The re-timing of a plan that does not move: one sample at ``t = 0``, inputs 0."""
+    state = np.asarray(start, dtype=float).reshape(1, -1).copy()
+    if reached is not None:
+        want = np.asarray(reached, dtype=float)
+        if not np.allclose(state[0], want, rtol=1e-8, atol=1e-8):
+            raise IntegrationError("a plan that does not move ends away from its start")
+        state[0] = want
+    m = len(bounds.accel)
+    arrays = (np.zeros(1), state, np.zeros((1, m)), np.zeros((1, m)), np.array([plan_time]))
+    for arr in arrays:
+        arr.setflags(write=False)
+    return TimedTrajectory(*arrays, (0.0,), bounds, tuple(system.coordinate_names))
 
 
 def _states_at(system: ControlSystem, start: Sequence[float] | State,
