@@ -27,9 +27,9 @@ import sympy as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
+from closed_forms import heisenberg_distance
 from nilpotent.errors import PlanningError
 from nilpotent.models import get_model
 from nilpotent.planning import TriangularSystem, endpoint, plan, steer_nilpotent
@@ -41,21 +41,6 @@ from nilpotent.planning.geodesic import (
     shortest_geodesic,
 )
 from nilpotent.planning.local_model import numeric_model
-
-
-def heisenberg_distance(x1: float, x2: float, x3: float) -> float:
-    """Dido's problem (module docstring)."""
-    r = math.hypot(x1, x2)
-    z = abs(x3)
-    if r == 0:
-        return math.sqrt(4 * math.pi * z)
-    if z == 0:
-        return r
-    q = z / r**2
-    phi = brentq(lambda p: (p - math.sin(p)) / (8 * math.sin(p / 2) ** 2) - q,
-                 1e-9, 2 * math.pi - 1e-12, xtol=1e-15, rtol=1e-15)
-    return r * phi / (2 * math.sin(phi / 2))
-
 
 Y3 = sp.symbols("y1 y2 y3")
 HEIS = TriangularSystem.from_fields(

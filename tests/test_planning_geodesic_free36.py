@@ -31,9 +31,9 @@ import numpy as np
 import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 
+from closed_forms import dido_distance as heisenberg_distance
 from nilpotent.models import get_model
 from nilpotent.planning import TriangularSystem, endpoint
 from nilpotent.planning.geodesic import (
@@ -44,19 +44,6 @@ from nilpotent.planning.geodesic import (
 )
 from nilpotent.planning.geodesic_forms import reduced_free3_solutions, rodrigues_integrals
 from nilpotent.planning.local_model import numeric_model
-
-
-def heisenberg_distance(r: float, z: float) -> float:
-    """Dido's problem: chord ``r``, area ``z`` (see test_planning_geodesic.py)."""
-    z = abs(z)
-    if r == 0:
-        return math.sqrt(4 * math.pi * z)
-    if z == 0:
-        return r
-    q = z / r**2
-    phi = brentq(lambda p: (p - math.sin(p)) / (8 * math.sin(p / 2) ** 2) - q,
-                 1e-9, 2 * math.pi - 1e-12, xtol=1e-15, rtol=1e-15)
-    return r * phi / (2 * math.sin(phi / 2))
 
 
 def free_36() -> TriangularSystem:

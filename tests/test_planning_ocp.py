@@ -18,9 +18,9 @@ import sys
 import numpy as np
 import pytest
 import sympy as sp
-from scipy.optimize import brentq
 
 import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
+from closed_forms import heisenberg_distance
 from nilpotent.core.model.outline import Limits
 from nilpotent.errors import MissingExtraError, OptionError
 from nilpotent.models import get_model
@@ -35,19 +35,6 @@ from replay import resimulate
 # the `ocp` extra (part of the `test` extra); the missing-extra tests need no CasADi
 needs_casadi = pytest.mark.skipif(importlib.util.find_spec("casadi") is None,
                                   reason='needs pip install "nilpotent[ocp]"')
-
-
-def heisenberg_distance(x1: float, x2: float, x3: float) -> float:
-    """Dido's problem (module docstring)."""
-    r, z = math.hypot(x1, x2), abs(x3)
-    if r == 0:
-        return math.sqrt(4 * math.pi * z)
-    if z == 0:
-        return r
-    q = z / r**2
-    phi = brentq(lambda p: (p - math.sin(p)) / (8 * math.sin(p / 2) ** 2) - q,
-                 1e-9, 2 * math.pi - 1e-12, xtol=1e-15, rtol=1e-15)
-    return r * phi / (2 * math.sin(phi / 2))
 
 
 #: Piecewise-constant controls on N intervals approximate the geodesic (a circular arc of
