@@ -79,6 +79,9 @@ def test_translation_refuses_what_it_cannot_express() -> None:
         to_casadi(x * p, {x: ca.SX.sym("x")})
     with pytest.raises(OptionError, match="cannot translate"):
         to_casadi(sp.gamma(x), {x: ca.SX.sym("x")})
+    # text is never parsed here (it reaches the fields only through the expression grammar)
+    with pytest.raises(TypeError, match="not str"):
+        to_casadi("x", {x: ca.SX.sym("x")})  # type: ignore[arg-type]
 
 
 @needs_casadi

@@ -194,12 +194,12 @@ def _functions(ca: Any) -> dict[type, Any]:
     }
 
 
-def to_casadi(expr: sp.Basic, symbols: Mapping[sp.Symbol, Any]) -> Any:
+def to_casadi(expr: sp.Basic | float, symbols: Mapping[sp.Symbol, Any]) -> Any:
     """The CasADi expression of a sympy expression (a walk of its tree, shared parts once).
 
     Parameters
     ----------
-    expr : sympy.Basic
+    expr : sympy.Basic or float
         Numbers, the symbols of ``symbols``, ``+``, ``*``, powers and the functions
         ``sin cos tan exp log atan atan2 asin acos sinh cosh tanh Abs sign sec csc cot
         Min Max``.
@@ -217,6 +217,8 @@ def to_casadi(expr: sp.Basic, symbols: Mapping[sp.Symbol, Any]) -> Any:
         the table.
     MissingExtraError
         CasADi is not installed.
+    TypeError
+        ``expr`` is neither a sympy expression nor a number (text is never parsed here).
     """
     ca = _casadi()
     table = _functions(ca)
@@ -268,7 +270,12 @@ def to_casadi(expr: sp.Basic, symbols: Mapping[sp.Symbol, Any]) -> Any:
         memo[e] = out
         return out
 
-    return walk(sp.sympify(expr))
+    if isinstance(expr, sp.Basic):
+        return walk(expr)
+    if isinstance(expr, int | float) and not isinstance(expr, bool):
+        return walk(sp.Float(expr) if isinstance(expr, float) else sp.Integer(expr))
+    # never text: user text reaches the fields only through the expression grammar
+    raise TypeError(f"to_casadi takes a sympy expression or a number, not {type(expr).__name__}")
 
 
 def _warm_controls(segments: Sequence[Segment], n_int: int, m: int) -> np.ndarray:
