@@ -494,3 +494,19 @@ def test_any_model_structure_is_accepted_or_refused_clearly(data):
     with contextlib.suppress(NilpotentError):
         system_from_dict(data, "fuzz.json")
 
+
+
+def test_progress_of_an_interrupted_task_does_not_say_done(monkeypatch):
+    import io
+
+    from nilpotent import progress as prog
+
+    monkeypatch.setattr(prog, "PLAIN_INTERVAL", 0.0)
+    monkeypatch.setitem(prog._state, "enabled", True)
+    stream = io.StringIO()
+    with pytest.raises(KeyboardInterrupt), prog.progress("steering", total=3,
+                                                         stream=stream) as bar:
+        bar.advance()
+        raise KeyboardInterrupt
+    text = stream.getvalue()
+    assert "stopped after" in text and "done in" not in text

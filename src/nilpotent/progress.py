@@ -355,13 +355,16 @@ def _shown(task: Progress, out: TextIO) -> Iterator[Progress]:
     stop = threading.Event()
     beat = threading.Thread(target=_heartbeat, args=(task, stop), daemon=True)
     beat.start()
+    finished = False
     try:
         yield task
+        finished = True
     finally:
         stop.set()
         beat.join()
-        if task._emitted:
-            task._emit(f" (done in {time.monotonic() - start:.1f} s)")
+        if task._emitted:  # an exception (an error, an interrupt) is not "done"
+            word = "done in" if finished else "stopped after"
+            task._emit(f" ({word} {time.monotonic() - start:.1f} s)")
 
 
 def _heartbeat(task: Progress, stop: threading.Event) -> None:
