@@ -249,3 +249,71 @@ def test_no_controls_to_refine_says_the_start_is_within_tol() -> None:
     segs, info = refine_segments(Checker(h), (0, 0, 0), (0.1, 0, 0), [], 0.5)
     assert segs == [] and not info.applied
     assert "within tol" in info.reason and "coincide" not in info.reason
+
+
+@needs_casadi
+def test_uniform_input_weights_scale_the_refined_length() -> None:
+    """With every weight ``c`` the metric is ``c`` times the standard one: the refined
+    Heisenberg length is ``c`` times Dido's closed-form distance."""
+    from nilpotent.planning.ocp import OcpRefine
+
+    h = get_model("heisenberg")
+    goal = (0.5, 0.3, 0.4)
+    warm = plan(h, (0, 0, 0), goal)
+    segs, info = refine_segments(Checker(h), (0, 0, 0), goal, warm.segments, 1e-8,
+                                 options=OcpRefine(input_weights=(2.0, 2.0)))
+    assert info.applied, info.reason
+    d = heisenberg_distance(*goal)
+    assert info.length_refined is not None
+    assert 2 * d * (1 - 1e-9) <= info.length_refined <= 2 * d * (1 + DISCRETISATION)
+    assert info.length_refined == pytest.approx(2 * control_length(segs), rel=1e-9)
+    assert info.to_json()["input_weights"] == [2.0, 2.0]
+
+
+def test_bad_refinement_options_are_option_errors() -> None:
+    from nilpotent.planning.ocp import OcpRefine
+
+    for bad in ({"starts": 0}, {"starts": 10**6}, {"reversal_cost": -1.0},
+                {"reversal_cost": float("nan")}, {"input_weights": (1.0, 0.0)},
+                {"input_weights": (1.0, float("inf"))}, {"input_weights": ()}):
+        with pytest.raises(OptionError):
+            OcpRefine(**bad)  # type: ignore[arg-type]
+    with pytest.raises(OptionError, match="2 inputs"):
+        OcpRefine(input_weights=(1.0, 1.0, 1.0)).weights(2)
+
+
+@needs_casadi
+def test_a_reversal_cost_needs_a_drive_input() -> None:
+    from nilpotent.planning.ocp import OcpRefine
+
+    h = get_model("heisenberg")
+    warm = plan(h, (0, 0, 0), (0.1, 0.0, 0.1))
+    with pytest.raises(OptionError, match="no drive input"):
+        refine_segments(Checker(h), (0, 0, 0), (0.1, 0.0, 0.1), warm.segments, 1e-8,
+                        options=OcpRefine(reversal_cost=1.0))
+
+
+@pytest.mark.slow
+@needs_casadi
+def test_car_with_cheap_steering_and_several_starts_is_near_reeds_shepp() -> None:
+    """The car shifted sideways by 1 (Reeds–Shepp optimum of radius 1 from OMPL): with the
+    steering rate weighted 0.1 and 4 starts, the re-simulated refined rear-axle path
+    ``∫|v| dt`` is within 1.25× the Reeds–Shepp length (the warm plan: about 8×)."""
+    ob = pytest.importorskip("ompl.base")
+    from nilpotent.planning.ocp import OcpRefine
+
+    car = get_model("car")
+    checker = Checker(car)
+    goal = (0.0, 1.0, 0.0, 0.0)
+    warm = plan(car, (0, 0, 0, 0), goal, objective="length")
+    segs, info = refine_segments(checker, (0, 0, 0, 0), goal, warm.segments, 1e-6,
+                                 options=OcpRefine(input_weights=(1.0, 0.1), starts=4))
+    assert info.applied, info.reason
+    states = resimulate(car, (0, 0, 0, 0), segment_dicts(segs))
+    assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-6
+    drive = sum(abs(s.inputs[0].constant) * s.duration for s in segs)
+    space = ob.ReedsSheppStateSpace(1.0)
+    a, b = space.allocState(), space.allocState()
+    a.setXY(0.0, 0.0), a.setYaw(0.0), b.setXY(0.0, 1.0), b.setYaw(0.0)
+    rs = space.distance(a, b)
+    assert drive <= 1.25 * rs, (drive, rs)

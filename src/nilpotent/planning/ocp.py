@@ -35,6 +35,16 @@ is then verified exactly as every plan is
 goal within ``tol``, limits, obstacles, singular margin), and kept only if it
 verifies and is shorter; otherwise the nilpotent plan stays, with the reason.
 
+Options (:class:`OcpRefine`): ``input_weights`` ``w`` make the energy
+``∫ Σ (w_i u_i)² dt`` (the metric in which the ``X_i / w_i`` are orthonormal: a small
+weight makes an input cheap, e.g. the car's steering rate, so that the length
+approaches the distance driven); ``starts`` runs IPOPT from the nilpotent plan and
+from ``starts − 1`` more, generic guesses (the straight line of states from start to
+goal, then seeded perturbations of it), each endpoint-corrected, the best verified
+one kept; ``reversal_cost`` adds ``C`` per reversal of a vehicle's drive input to the
+cost by which those candidates and the nilpotent plan are compared (a cost of the
+choice, not a term of the IPOPT objective, which stays smooth).
+
 Obstacles and the singular margin are not constraints of the optimal control
 problem (only the limits are): a refined motion that touches an obstacle is
 refused by the verification.  Input bounds are not constraints either: the
@@ -53,31 +63,33 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import sympy as sp
 
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import (
     ComputationLimitError,
     IntegrationError,
-    MissingExtraError,
     OptionError,
 )
 from nilpotent.numeric.settings import IntegrationSettings
+from nilpotent.numeric.signals import InputSignal
 from nilpotent.planning import budget
+from nilpotent.planning.casadi_tree import casadi_module
+from nilpotent.planning.casadi_tree import to_casadi as to_casadi
 from nilpotent.planning.controls import Segment, constant_segment
 from nilpotent.planning.geodesic import control_length
 from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_candidates
+from nilpotent.planning.timing import drive_reversals
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.strict_json import json_object
 
 __all__ = [
-    "INTERVALS", "REFINEMENTS", "Refinement", "check_refine", "refine_route", "refine_segments",
-    "to_casadi",
+    "INTERVALS", "MAX_STARTS", "REFINEMENTS", "OcpRefine", "Refinement", "check_refine",
+    "refine_route", "refine_segments", "to_casadi",
 ]
 
 #: Values of ``refine`` (``--refine``): no refinement, or direct optimal control.
@@ -95,7 +107,72 @@ CORRECTIONS = 8
 #: Samples per segment of the verification (as the global planner's).
 VERIFY_POINTS = 100
 
+#: Most IPOPT starts of one refinement (:attr:`OcpRefine.starts`).
+MAX_STARTS = 32
+#: Standard deviation of the seeded perturbations of the straight-line state guess (model
+#: units, times ``sin(πt)`` so that the ends stay put) and of the control guess.
+START_SPREAD = 0.5
+
 _INSTALL = 'pip install "nilpotent[ocp]"'
+
+
+@dataclass(frozen=True)
+class OcpRefine:
+    """How the refinement by direct optimal control runs (``refine=`` of
+    :func:`~nilpotent.planning.global_planner.plan_global`; ``"ocp"`` is ``OcpRefine()``).
+
+    Attributes
+    ----------
+    input_weights : tuple of float or None
+        Positive weights ``w_i``, one per input: the energy is ``∫ Σ (w_i u_i)² dt`` and
+        the lengths compared and reported are ``∫ ‖w ∘ u‖ dt``; ``None``: all 1.
+    starts : int
+        IPOPT starts (1 to :data:`MAX_STARTS`): the nilpotent plan, then the straight
+        line of states, then seeded perturbations of it (:data:`START_SPREAD`).
+    reversal_cost : float
+        ``C ≥ 0`` added per reversal of the drive input (vehicle models only) to the
+        cost by which the candidates and the nilpotent plan are compared.
+    seed : int
+        Seed of the perturbed starts (the plan's ``seed``).
+
+    Raises
+    ------
+    OptionError
+        A weight not positive and finite, ``starts`` outside ``1..MAX_STARTS``, a
+        negative or non-finite ``reversal_cost``.
+    """
+
+    input_weights: tuple[float, ...] | None = None
+    starts: int = 1
+    reversal_cost: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.input_weights is not None:
+            bad = [w for w in self.input_weights if not (math.isfinite(w) and w > 0)]
+            if bad or not self.input_weights:
+                raise OptionError(f"--input-weights must be positive finite numbers, one per "
+                                  f"input; got {list(self.input_weights)[:8]}")
+        if not (isinstance(self.starts, int) and 1 <= self.starts <= MAX_STARTS):
+            raise OptionError(f"--refine-starts must be an integer from 1 to {MAX_STARTS}; "
+                              f"got {self.starts!r}")
+        if not (math.isfinite(self.reversal_cost) and self.reversal_cost >= 0):
+            raise OptionError(f"--reversal-cost must be a number >= 0; got {self.reversal_cost}")
+
+    def weights(self, m: int) -> np.ndarray:
+        """The weights as an ``(m,)`` array (ones when none were given).
+
+        Raises
+        ------
+        OptionError
+            ``input_weights`` does not have ``m`` entries.
+        """
+        if self.input_weights is None:
+            return np.ones(m)
+        if len(self.input_weights) != m:
+            raise OptionError(f"--input-weights: {len(self.input_weights)} weights for {m} "
+                              "inputs")
+        return np.array(self.input_weights, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -124,6 +201,17 @@ class Refinement:
         Distance to the goal of the re-simulated refined controls.
     seconds : float
         Wall-clock time of the refinement, verification included.
+    input_weights : tuple of float or None
+        The weights of the metric of ``length_before``/``length_refined`` (``None``: 1).
+    starts : int
+        IPOPT starts tried.
+    candidates : int
+        Starts whose controls, re-simulated, reached the goal within ``tol``.
+    reversal_cost : float
+        The cost per reversal of the drive input in the comparison.
+    cost_before, cost_refined : float or None
+        Length plus ``reversal_cost`` times the drive reversals, of the nilpotent plan
+        and of the refined controls (``None`` when there are none).
     verification : Verification or None
         The dense re-simulation of the refined controls when they were applied (the
         plan's own verification; not in :meth:`to_json`).
@@ -139,6 +227,12 @@ class Refinement:
     solver_iterations: int = 0
     refined_error: float | None = None
     seconds: float = 0.0
+    input_weights: tuple[float, ...] | None = None
+    starts: int = 1
+    candidates: int = 0
+    reversal_cost: float = 0.0
+    cost_before: float | None = None
+    cost_refined: float | None = None
     verification: Verification | None = field(default=None, repr=False, compare=False)
 
     def to_json(self) -> dict[str, Any]:
@@ -149,26 +243,24 @@ class Refinement:
             "intervals": self.intervals, "solver_status": self.solver_status,
             "solver_iterations": self.solver_iterations, "refined_error": self.refined_error,
             "seconds": self.seconds,
+            "input_weights": None if self.input_weights is None else list(self.input_weights),
+            "starts": self.starts, "candidates": self.candidates,
+            "reversal_cost": self.reversal_cost, "cost_before": self.cost_before,
+            "cost_refined": self.cost_refined,
         })
 
 
 def _casadi() -> Any:
-    try:
-        import casadi  # pyright: ignore[reportMissingImports]  (the optional [ocp] extra)
-    except ImportError:
-        raise MissingExtraError(
-            f"--refine ocp (refine='ocp') needs CasADi, which is not installed: {_INSTALL}"
-        ) from None
-    return casadi
+    return casadi_module()
 
 
-def check_refine(refine: str) -> None:
+def check_refine(refine: str | OcpRefine) -> None:
     """Raise unless ``refine`` is one of :data:`REFINEMENTS` and what it needs is installed.
 
     Parameters
     ----------
-    refine : str
-        ``"none"`` or ``"ocp"``.
+    refine : str or OcpRefine
+        ``"none"``, ``"ocp"``, or the options of an ``"ocp"`` refinement.
 
     Raises
     ------
@@ -177,105 +269,14 @@ def check_refine(refine: str) -> None:
     MissingExtraError
         ``"ocp"`` without CasADi (the ``ocp`` extra).
     """
+    if isinstance(refine, OcpRefine):
+        _casadi()
+        return
     if refine not in REFINEMENTS:
         raise OptionError(
             f"--refine must be {' or '.join(REFINEMENTS)}; got {str(refine)[:60]!r}")
     if refine == "ocp":
         _casadi()
-
-
-def _functions(ca: Any) -> dict[type, Any]:
-    return {
-        sp.sin: ca.sin, sp.cos: ca.cos, sp.tan: ca.tan, sp.exp: ca.exp, sp.log: ca.log,
-        sp.atan: ca.atan, sp.asin: ca.asin, sp.acos: ca.acos, sp.sinh: ca.sinh,
-        sp.cosh: ca.cosh, sp.tanh: ca.tanh, sp.Abs: ca.fabs, sp.sign: ca.sign,
-        sp.sec: lambda a: 1 / ca.cos(a), sp.csc: lambda a: 1 / ca.sin(a),
-        sp.cot: lambda a: 1 / ca.tan(a),
-    }
-
-
-def to_casadi(expr: sp.Basic | float, symbols: Mapping[sp.Symbol, Any]) -> Any:
-    """The CasADi expression of a sympy expression (a walk of its tree, shared parts once).
-
-    Parameters
-    ----------
-    expr : sympy.Basic or float
-        Numbers, the symbols of ``symbols``, ``+``, ``*``, powers and the functions
-        ``sin cos tan exp log atan atan2 asin acos sinh cosh tanh Abs sign sec csc cot
-        Min Max``.
-    symbols : mapping
-        sympy symbol → CasADi expression (``SX`` or ``MX``).
-
-    Returns
-    -------
-    casadi.SX or casadi.MX
-
-    Raises
-    ------
-    OptionError
-        A symbol not in ``symbols`` (an unsubstituted parameter) or an operation outside
-        the table.
-    MissingExtraError
-        CasADi is not installed.
-    TypeError
-        ``expr`` is neither a sympy expression nor a number (text is never parsed here).
-    """
-    ca = _casadi()
-    table = _functions(ca)
-    memo: dict[sp.Basic, Any] = {}
-
-    def walk(e: sp.Basic) -> Any:
-        if e in memo:
-            return memo[e]
-        if isinstance(e, sp.Symbol):
-            if e not in symbols:
-                raise OptionError(f"--refine ocp: the fields use {e}, which is no coordinate")
-            out = symbols[e]
-        elif e.is_number and not e.free_symbols:
-            value = complex(sp.N(e, 17))
-            if value.imag != 0 or not math.isfinite(value.real):
-                raise OptionError(f"--refine ocp: {e} is not a finite real number")
-            out = value.real
-        elif isinstance(e, sp.Add):
-            parts = [walk(a) for a in e.args]
-            out = parts[0]
-            for p in parts[1:]:
-                out = out + p
-        elif isinstance(e, sp.Mul):
-            parts = [walk(a) for a in e.args]
-            out = parts[0]
-            for p in parts[1:]:
-                out = out * p
-        elif isinstance(e, sp.Pow):
-            base, exp = e.args
-            if exp == sp.Rational(1, 2):
-                out = ca.sqrt(walk(base))
-            elif isinstance(exp, sp.Integer):
-                out = ca.constpow(walk(base), int(exp))
-            else:
-                out = ca.power(walk(base), walk(exp))
-        elif isinstance(e, sp.atan2):
-            out = ca.atan2(walk(e.args[0]), walk(e.args[1]))
-        elif isinstance(e, sp.Min | sp.Max):
-            op = ca.fmin if isinstance(e, sp.Min) else ca.fmax
-            parts = [walk(a) for a in e.args]
-            out = parts[0]
-            for p in parts[1:]:
-                out = op(out, p)
-        elif type(e) in table and len(e.args) == 1:
-            out = table[type(e)](walk(e.args[0]))
-        else:
-            raise OptionError(
-                f"--refine ocp: cannot translate {type(e).__name__} of the fields to CasADi")
-        memo[e] = out
-        return out
-
-    if isinstance(expr, sp.Basic):
-        return walk(expr)
-    if isinstance(expr, int | float) and not isinstance(expr, bool):
-        return walk(sp.Float(expr) if isinstance(expr, float) else sp.Integer(expr))
-    # never text: user text reaches the fields only through the expression grammar
-    raise TypeError(f"to_casadi takes a sympy expression or a number, not {type(expr).__name__}")
 
 
 def _warm_controls(segments: Sequence[Segment], n_int: int, m: int) -> np.ndarray:
@@ -331,11 +332,45 @@ def _pads(lo: float, hi: float, ends: np.ndarray) -> tuple[float, float]:
             max(0.0, min(pad, hi - float(np.max(ends)))))
 
 
+def _scaled(segments: Sequence[Segment], w: np.ndarray) -> list[Segment]:
+    """``segments`` with input ``i`` multiplied by ``w[i]`` (their weighted length is
+    :func:`~nilpotent.planning.geodesic.control_length` of these)."""
+    return [Segment(seg.duration, seg.omega, tuple(
+        InputSignal(s.constant * float(wi), tuple(c * float(wi) for c in s.cos),
+                    tuple(c * float(wi) for c in s.sin))
+        for s, wi in zip(seg.inputs, w, strict=True))) for seg in segments]
+
+
+def _guesses(checker: Checker, x0: np.ndarray, xg: np.ndarray, n_int: int,
+             options: OcpRefine) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The generic starts after the nilpotent plan: ``(controls (m, N), states (n, N+1))``:
+    the straight line of states with seeded controls, then seeded perturbations of the
+    line (:data:`START_SPREAD` times ``sin(πt)``), clipped into the box limits."""
+    system = checker.system
+    t = np.linspace(0.0, 1.0, n_int + 1)
+    line = x0[:, None] + (xg - x0)[:, None] * t[None, :]
+    assert checker.limits is not None
+    names = system.coordinate_names
+    out = []
+    for k in range(1, options.starts):
+        rng = np.random.default_rng([options.seed, k])
+        states = line + (0.0 if k == 1 else rng.normal(0.0, START_SPREAD, line.shape)
+                         * np.sin(np.pi * t)[None, :])
+        for name, lo, hi in checker.limits.bounds:
+            j = names.index(name)
+            states[j] = np.clip(states[j], lo, hi)
+        out.append((rng.normal(0.0, 1.0, (system.m, n_int)), states))
+    return out
+
+
 def _solve(
     ca: Any, system: ControlSystem, checker: Checker, x0: np.ndarray, xg: np.ndarray,
-    u0: np.ndarray, n_int: int,
+    u0: np.ndarray, n_int: int, weights: np.ndarray | None = None,
+    states0: np.ndarray | None = None, share: float = 0.8,
 ) -> tuple[np.ndarray | None, str, int, Any]:
-    """IPOPT on the multiple-shooting problem: ``(u, status, iterations, step)``."""
+    """IPOPT on the multiple-shooting problem: ``(u, status, iterations, step)``; started
+    from controls ``u0`` and states ``states0`` (default: the RK4 roll-out of ``u0``),
+    with at most ``share`` of the time left."""
     step = _problem(ca, system, n_int)
     limits = checker.limits
     assert limits is not None
@@ -348,7 +383,8 @@ def _solve(
     opti = ca.Opti()
     xs = opti.variable(system.n, n_int + 1)
     us = opti.variable(system.m, n_int)
-    opti.minimize(ca.sumsqr(us) / n_int)
+    w = np.ones(system.m) if weights is None else weights
+    opti.minimize(ca.sumsqr(ca.DM(np.repeat(w[:, None], n_int, axis=1)) * us) / n_int)
     nxt, subs = step.map(n_int)(xs[:, :n_int], us)
     opti.subject_to(xs[:, 0] == x0)
     opti.subject_to(xs[:, n_int] == xg)
@@ -365,9 +401,12 @@ def _solve(
         for r, (_, _, lo, hi) in enumerate(limits.relative):
             pad_lo, pad_hi = _pads(lo, hi, at_ends[r])
             opti.subject_to(opti.bounded(lo + pad_lo, values[r, :], hi - pad_hi))
-    # warm start: the nilpotent plan's controls and their RK4 roll-out
-    roll = step.mapaccum(n_int)(x0, u0)
-    states = np.hstack([x0[:, None], np.array(roll[0])])
+    # warm start: the nilpotent plan's controls and their RK4 roll-out (or given states)
+    if states0 is None:
+        roll = step.mapaccum(n_int)(x0, u0)
+        states = np.hstack([x0[:, None], np.array(roll[0])])
+    else:
+        states = states0
     if not np.all(np.isfinite(states)):
         return None, "the warm start's RK4 roll-out is not finite", 0, step
     opti.set_initial(us, u0)
@@ -376,7 +415,7 @@ def _solve(
     opts: dict[str, Any] = {"print_level": 0, "max_iter": IPOPT_ITERATIONS, "tol": 1e-10,
                             "sb": "yes"}
     if math.isfinite(left):
-        opts["max_wall_time"] = max(0.1, 0.8 * left)
+        opts["max_wall_time"] = max(0.1, share * left)
     opti.solver("ipopt", {"print_time": False}, opts)
     try:
         sol = opti.solve()
@@ -428,6 +467,7 @@ def refine_segments(
     *,
     intervals: int = INTERVALS,
     settings: IntegrationSettings = PLANNING_SETTINGS,
+    options: OcpRefine | None = None,
 ) -> tuple[list[Segment], Refinement]:
     """Shorter controls from ``start`` to ``goal`` by direct optimal control, if they verify.
 
@@ -447,70 +487,118 @@ def refine_segments(
     settings : IntegrationSettings
         How the true system is re-simulated (default
         :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`).
+    options : OcpRefine or None
+        Input weights, starts, reversal cost (default ``OcpRefine()``: weights 1, the
+        nilpotent plan as the only start, no reversal cost).
 
     Returns
     -------
     segments, refinement
-        The refined controls if they verify (goal within ``tol``, admissible) and are
-        shorter, else ``segments`` unchanged; and what was done (:class:`Refinement`).
+        The cheapest refined controls that verify (goal within ``tol``, admissible) and
+        cost less than ``segments`` (cost: the weighted length plus the reversal cost),
+        else ``segments`` unchanged; and what was done (:class:`Refinement`).
 
     Raises
     ------
     MissingExtraError
         CasADi is not installed.
     OptionError
-        ``intervals`` below 2, or fields CasADi cannot express.
+        ``intervals`` below 2, fields CasADi cannot express, weights not one per input,
+        a reversal cost for a model without a drive input.
     ComputationLimitError
-        The time budget ran out.
+        The time budget ran out before any candidate was found.
     """
     ca = _casadi()
     if not (isinstance(intervals, int) and intervals >= 2):
         raise OptionError(f"intervals must be an integer >= 2, got {intervals!r}")
+    opts = OcpRefine() if options is None else options
     t0 = time.perf_counter()
     system = checker.system
+    w = opts.weights(system.m)
+    if opts.reversal_cost > 0 and drive_reversals(system, ()) is None:
+        raise OptionError(f"--reversal-cost: model {system.name} has no drive input (vehicle "
+                          "models only)")
     x0 = np.asarray(start, dtype=float)
     xg = np.asarray(goal, dtype=float)
-    before = control_length(segments)
+
+    def length_of(segs: Sequence[Segment]) -> float:
+        return control_length(segs if opts.input_weights is None else _scaled(segs, w))
+
+    def cost_of(segs: Sequence[Segment], length: float) -> float:
+        reversals = drive_reversals(system, segs) if opts.reversal_cost > 0 else 0
+        return length + opts.reversal_cost * (reversals or 0)
+
+    before = length_of(segments)
+    common: dict[str, Any] = {"input_weights": opts.input_weights, "starts": opts.starts,
+                              "reversal_cost": opts.reversal_cost,
+                              "cost_before": cost_of(segments, before)}
 
     def keep(reason: str, **more: Any) -> tuple[list[Segment], Refinement]:
         return list(segments), Refinement("ocp", False, reason, before, intervals=intervals,
-                                          seconds=time.perf_counter() - t0, **more)
+                                          seconds=time.perf_counter() - t0, **common, **more)
 
     if not segments:
         return keep("the plan has no controls (the start is within tol of the goal)")
     budget.check("refining the plan by optimal control")
-    u0 = _warm_controls(segments, intervals, system.m)
-    u, status, its, step = _solve(ca, system, checker, x0, xg, u0, intervals)
-    if u is None:
-        return keep(f"IPOPT found no solution ({status})", solver_status=status,
-                    solver_iterations=its)
-    solved = {"solver_status": status, "solver_iterations": its}
-    try:
-        u, err = _correct(ca, system, step, x0, xg, u, tol, settings)
-    except IntegrationError as exc:
-        return keep(f"the refined controls cannot be re-simulated: {exc}", **solved)
-    refined = _segments(u)
-    after = control_length(refined)
-    solved.update(length_refined=after, refined_error=err)
-    if not err <= tol:
-        return keep(f"the re-simulated refined controls miss the goal by {err:.3g} > tol "
-                    f"{tol:g}", **solved)
-    v = verify_segments(checker, x0, refined, xg, VERIFY_POINTS, settings)
-    if not v.admissible:
-        why = checker.why_invalid(v.states[int(np.argmin(
-            checker.valid(v.states)))]) or "not admissible between samples"
-        return keep(f"the refined motion is not admissible: {why}", **solved)
-    if not v.error <= tol:
-        return keep(f"the refined plan misses the goal by {v.error:.3g} > tol {tol:g} "
-                    "(dense re-simulation)", **solved)
-    if not after < before:
-        return keep(f"not shorter: {after:.6g} against {before:.6g}", **solved)
-    return refined, Refinement("ocp", True, "", before, intervals=intervals,
-                               seconds=time.perf_counter() - t0, verification=v, **solved)
+    starts = [(_warm_controls(segments, intervals, system.m), None),
+              *_guesses(checker, x0, xg, intervals, opts)]
+    found: list[tuple[float, float, float, list[Segment], dict[str, Any]]] = []
+    reasons: list[str] = []
+    solved: dict[str, Any] = {}
+    for k, (u0, states0) in enumerate(starts):
+        try:
+            budget.check("refining the plan by optimal control")
+            u, status, its, step = _solve(ca, system, checker, x0, xg, u0, intervals, w,
+                                          states0, share=0.8 / (len(starts) - k))
+            solved = {"solver_status": status, "solver_iterations": its}
+            if u is None:
+                reasons.append(f"IPOPT found no solution ({status})")
+                continue
+            u, err = _correct(ca, system, step, x0, xg, u, tol, settings)
+        except IntegrationError as exc:
+            reasons.append(f"the refined controls cannot be re-simulated: {exc}")
+            continue
+        except ComputationLimitError:
+            if not found:
+                raise
+            break  # the time left goes to the candidates found
+        refined = _segments(u)
+        after = length_of(refined)
+        solved.update(length_refined=after, refined_error=err)
+        if not err <= tol:
+            reasons.append(f"the re-simulated refined controls miss the goal by {err:.3g} > "
+                           f"tol {tol:g}")
+            continue
+        found.append((cost_of(refined, after), after, err, refined, dict(solved)))
+    common["candidates"] = len(found)
+    if not found:
+        return keep(reasons[0] if len(set(reasons)) == 1 else
+                    f"no start gave a candidate: {'; '.join(dict.fromkeys(reasons))}"[:400],
+                    **solved)
+    found.sort(key=lambda c: c[0])
+    for cost, _after, _err, refined, info in found:
+        info["cost_refined"] = cost
+        v = verify_segments(checker, x0, refined, xg, VERIFY_POINTS, settings)
+        if not v.admissible:
+            why = checker.why_invalid(v.states[int(np.argmin(
+                checker.valid(v.states)))]) or "not admissible between samples"
+            reasons = [f"the refined motion is not admissible: {why}"]
+        elif not v.error <= tol:
+            reasons = [f"the refined plan misses the goal by {v.error:.3g} > tol {tol:g} "
+                       "(dense re-simulation)"]
+        elif not cost < common["cost_before"]:  # the cheapest admissible one is not cheaper
+            what = "shorter" if opts.reversal_cost == 0 else "cheaper (length + reversals)"
+            return keep(f"not {what}: {cost:.6g} against {common['cost_before']:.6g}", **info)
+        else:
+            return refined, Refinement("ocp", True, "", before, intervals=intervals,
+                                       seconds=time.perf_counter() - t0, verification=v,
+                                       **common, **info)
+        solved = info
+    return keep(reasons[0], **solved)
 
 
 def refine_route(
-    refine: str, checker: Checker, start: np.ndarray, goal: np.ndarray,
+    refine: str | OcpRefine, checker: Checker, start: np.ndarray, goal: np.ndarray,
     segments: list[Segment], tol: float, settings: IntegrationSettings,
 ) -> tuple[list[Segment], Refinement] | None:
     """What :func:`~nilpotent.planning.global_planner.plan_global` does with ``refine``:
@@ -521,7 +609,8 @@ def refine_route(
         return None
     t0 = time.perf_counter()
     try:
-        return refine_segments(checker, start, goal, segments, tol, settings=settings)
+        return refine_segments(checker, start, goal, segments, tol, settings=settings,
+                               options=refine if isinstance(refine, OcpRefine) else None)
     except ComputationLimitError as exc:
         return list(segments), Refinement("ocp", False, f"stopped by the time limit: {exc}",
                                           control_length(segments),
