@@ -366,12 +366,14 @@ def _guesses(checker: Checker, x0: np.ndarray, xg: np.ndarray, n_int: int,
 def _solve(
     ca: Any, system: ControlSystem, checker: Checker, x0: np.ndarray, xg: np.ndarray,
     u0: np.ndarray, n_int: int, weights: np.ndarray | None = None,
-    states0: np.ndarray | None = None, share: float = 0.8,
+    states0: np.ndarray | None = None, share: float = 0.8, step: Any = None,
 ) -> tuple[np.ndarray | None, str, int, Any]:
     """IPOPT on the multiple-shooting problem: ``(u, status, iterations, step)``; started
     from controls ``u0`` and states ``states0`` (default: the RK4 roll-out of ``u0``),
-    with at most ``share`` of the time left."""
-    step = _problem(ca, system, n_int)
+    with at most ``share`` of the time left; ``step``: the interval flow of
+    :func:`_problem`, built once per refinement (built here when ``None``)."""
+    if step is None:
+        step = _problem(ca, system, n_int)
     limits = checker.limits
     assert limits is not None
     rel = None
@@ -545,11 +547,13 @@ def refine_segments(
     found: list[tuple[float, float, float, list[Segment], dict[str, Any]]] = []
     reasons: list[str] = []
     solved: dict[str, Any] = {}
+    flow = _problem(ca, system, intervals)  # the CasADi graph once, for every start
     for k, (u0, states0) in enumerate(starts):
         try:
             budget.check("refining the plan by optimal control")
             u, status, its, step = _solve(ca, system, checker, x0, xg, u0, intervals, w,
-                                          states0, share=0.8 / (len(starts) - k))
+                                          states0, share=0.8 / (len(starts) - k),
+                                          step=flow)
             solved = {"solver_status": status, "solver_iterations": its}
             if u is None:
                 reasons.append(f"IPOPT found no solution ({status})")
@@ -612,6 +616,12 @@ def refine_route(
         return refine_segments(checker, start, goal, segments, tol, settings=settings,
                                options=refine if isinstance(refine, OcpRefine) else None)
     except ComputationLimitError as exc:
+        opts = refine if isinstance(refine, OcpRefine) else OcpRefine()
+        weighted = segments if opts.input_weights is None else _scaled(
+            segments, opts.weights(checker.system.m))
         return list(segments), Refinement("ocp", False, f"stopped by the time limit: {exc}",
-                                          control_length(segments),
-                                          seconds=time.perf_counter() - t0)
+                                          control_length(weighted),
+                                          seconds=time.perf_counter() - t0,
+                                          input_weights=opts.input_weights,
+                                          starts=opts.starts,
+                                          reversal_cost=opts.reversal_cost)
