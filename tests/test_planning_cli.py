@@ -55,7 +55,7 @@ def test_plan_human_output_and_figures(run_cli, tmp_path):
     png = tmp_path / "plan.png"
     gif = tmp_path / "plan.gif"
     status, out, _ = run_cli("plan", "trident-snake", "--to", "x=1/20,phi1=1/10",
-                             "--plot", str(png), "--animate", str(gif))
+                             "--plot", str(png), "--animate", str(gif), "--time-limit", "900")
     assert status == 0, out
     assert "goal reached" in out
     assert png.stat().st_size > 1000

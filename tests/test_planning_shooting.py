@@ -119,7 +119,7 @@ def test_plan_objective_length_on_engel_is_verified_and_shorter(monkeypatch) -> 
 def test_cli_step_3_objective_length(run_cli, monkeypatch) -> None:
     monkeypatch.setattr("nilpotent.planning.length.LOWER_BOUND_SECONDS", math.inf)
     status, stdout, stderr = run_cli("plan", "engel", "--to", "x1=1/10,x4=1/20",
-                                     "--objective", "length", "--json")
+                                     "--objective", "length", "--time-limit", "900", "--json")
     assert status == 0, stderr
     out = json.loads(stdout)
     assert out["error"] <= 1e-8
