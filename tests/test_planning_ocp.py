@@ -317,3 +317,78 @@ def test_car_with_cheap_steering_and_several_starts_is_near_reeds_shepp() -> Non
     a.setXY(0.0, 0.0), a.setYaw(0.0), b.setXY(0.0, 1.0), b.setYaw(0.0)
     rs = space.distance(a, b)
     assert drive <= 1.25 * rs, (drive, rs)
+
+
+# --- the command line: the refinement's options ----------------------------------------
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--input-weights", "u2=1/10"], "--input-weights needs --refine ocp"),
+    (["--refine-starts", "2"], "--refine-starts needs --refine ocp"),
+    (["--reversal-cost", "1"], "--reversal-cost needs --refine ocp"),
+    (["--refine", "ocp", "--input-weights", "u3=1"], "unknown input 'u3'"),
+    (["--refine", "ocp", "--input-weights", "u2=0"], "a weight must be a positive number"),
+    (["--refine", "ocp", "--input-weights", "-1"], "a weight must be a positive number"),
+    (["--refine", "ocp", "--input-weights", "u1=1,u1=2"], "u1 given twice"),
+    (["--refine", "ocp", "--input-weights", "u1="], "a weight is missing"),
+    (["--refine", "ocp", "--input-weights", "w"], "--input-weights: unknown name 'w'"),
+    (["--refine", "ocp", "--refine-starts", "0"], "--refine-starts"),
+    (["--refine", "ocp", "--refine-starts", "33"], "--refine-starts"),
+    (["--refine", "ocp", "--reversal-cost", "-1"], "--reversal-cost"),
+    (["--refine", "ocp", "--reversal-cost", "1"], "no drive input"),
+])
+def test_cli_refinement_options_are_checked_before_any_work(run_cli, args, message) -> None:
+    """Each bad value (and each option without ``--refine ocp``, which would be ignored)
+    is an option (or expression) error naming it, exit 2, on the Heisenberg system (no
+    drive input)."""
+    status, stdout, stderr = run_cli("plan", "heisenberg", "--to", "x3=1/10", *args, "--json")
+    assert status == 2, stdout
+    err = json.loads(stdout)["error"]
+    assert err["kind"] in ("option", "expression") and message in err["message"], err
+    assert "Traceback" not in stderr
+
+
+def test_cli_most_refine_starts_is_the_library_s() -> None:
+    from nilpotent.cli.plan_options import MAX_REFINE_STARTS
+    from nilpotent.planning.ocp import MAX_STARTS
+
+    assert MAX_REFINE_STARTS == MAX_STARTS
+
+
+@needs_casadi
+def test_cli_input_weights_and_starts_reach_the_refinement(run_cli) -> None:
+    """``--input-weights 2`` on the Heisenberg system: the refined length (in the weighted
+    metric) is twice Dido's closed-form distance; the options are reported; the plan is
+    re-simulated independently to the goal."""
+    goal = (0.5, 0.3, 0.4)
+    status, stdout, stderr = run_cli(
+        "plan", "heisenberg", "--to", "x1=1/2,x2=3/10,x3=2/5", "--refine", "ocp",
+        "--input-weights", "2", "--refine-starts", "2", "--seed", "7", "--time-limit", "900",
+        "--json")
+    assert status == 0, stderr
+    data = json.loads(stdout)
+    ref = data["refinement"]
+    assert ref["applied"] is True, ref
+    assert ref["input_weights"] == [2.0, 2.0] and ref["starts"] == 2
+    assert ref["candidates"] >= 1 and ref["reversal_cost"] == 0.0
+    d = heisenberg_distance(*goal)
+    assert 2 * d * (1 - 1e-9) <= ref["length_refined"] <= 2 * d * (1 + DISCRETISATION)
+    q = resimulate(get_model("heisenberg"), data["from"], data["segments"])
+    assert np.linalg.norm(q[-1] - np.array(goal)) <= 1e-7
+
+
+@needs_casadi
+def test_cli_reversal_cost_on_a_vehicle_is_reported(run_cli) -> None:
+    """``--reversal-cost`` on the unicycle: the refinement's cost is its length plus C
+    times the drive reversals of the controls it kept (counted here from the segments)."""
+    status, stdout, stderr = run_cli(
+        "plan", "unicycle", "--to", "x=1/2,y=1/5,theta=1/5", "--refine", "ocp",
+        "--reversal-cost", "1.5", "--time-limit", "900", "--json")
+    assert status == 0, stderr
+    data = json.loads(stdout)
+    ref = data["refinement"]
+    assert ref["reversal_cost"] == 1.5
+    if ref["applied"]:
+        assert ref["cost_refined"] == pytest.approx(
+            ref["length_refined"] + 1.5 * data["reversals"], rel=1e-9)
+        assert ref["cost_refined"] <= ref["cost_before"]

@@ -34,12 +34,15 @@ from nilpotent.cli.app import (
 from nilpotent.cli.plan_options import (
     ClearanceOpt,
     FromOpt,
+    InputWeightsOpt,
     LimitOpt,
     MarginOpt,
     MaxAccelOpt,
     MaxPieceOpt,
     MaxSpeedOpt,
     PlannerOpt,
+    RefineStartsOpt,
+    ReversalCostOpt,
     SeedOpt,
     TimeLimitOpt,
     ToOpt,
@@ -49,6 +52,7 @@ from nilpotent.cli.plan_options import (
     command_budget,
     parse_bound_option,
     plan_from_options,
+    refine_from_options,
 )
 from nilpotent.errors import OptionError
 
@@ -184,6 +188,9 @@ def plan_command(
     objective: ObjectiveOpt = "reach",
     planner: PlannerOpt = "rrtconnect",
     refine: RefineOpt = "none",
+    input_weights: InputWeightsOpt = None,
+    refine_starts: RefineStartsOpt = None,
+    reversal_cost: ReversalCostOpt = None,
     max_speed: MaxSpeedOpt = None,
     max_accel: MaxAccelOpt = None,
     trajectory_out: TrajectoryOutOpt = None,
@@ -230,6 +237,8 @@ def plan_command(
     system = load_model_option(model, param)
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
+    refine_how = refine_from_options(refine, system, seed, input_weights, refine_starts,
+                                     reversal_cost)
     speed = parse_bound_option(max_speed, system, "--max-speed")
     accel = parse_bound_option(max_accel, system, "--max-accel", every=True)
     if accel is None and (speed is not None or trajectory_out is not None
@@ -242,7 +251,7 @@ def plan_command(
         result = plan_from_options(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,
-            clearance=clearance, objective=objective, refine=refine, max_speed=speed,
+            clearance=clearance, objective=objective, refine=refine_how, max_speed=speed,
             max_accel=accel, trajectory_step=trajectory_step, planner=planner,
         )
     write_pictures(result, plot, animate)

@@ -118,6 +118,112 @@ TrajectoryStepOpt = Annotated[
 ]
 
 
+MAX_REFINE_STARTS = 32
+"""Most ``--refine-starts`` (:data:`nilpotent.planning.ocp.MAX_STARTS`, not imported here:
+the command line starts without CasADi)."""
+
+InputWeightsOpt = Annotated[
+    str | None,
+    typer.Option("--input-weights", metavar="W",
+                 help="With --refine ocp: weight the inputs in the refinement's metric, "
+                      "energy = integral of sum (w_i u_i)^2; u1=W1,u2=W2 (inputs left out: 1), "
+                      "e.g. u2=1/10 makes steering cheap."),
+]
+
+RefineStartsOpt = Annotated[
+    int | None,
+    typer.Option("--refine-starts", metavar="N",
+                 help="With --refine ocp: IPOPT starts (the plan, the straight line of "
+                      "states, then perturbations seeded by --seed); the cheapest verified "
+                      "one is kept (default 1).",
+                 parser=bounded_int("--refine-starts", 1, MAX_REFINE_STARTS,
+                                    what=" (each start is one IPOPT solve)", above=OptionError)),
+]
+
+ReversalCostOpt = Annotated[
+    float | None,
+    typer.Option("--reversal-cost", metavar="C",
+                 help="With --refine ocp, vehicle models: add C per reversal of the drive "
+                      "input to the cost by which refined candidates are chosen (default 0).",
+                 parser=bounded_float("--reversal-cost", 0.0)),
+]
+
+
+def parse_weights_option(text: str, system) -> tuple[float, ...]:
+    """``--input-weights``: ``W`` (every input) or ``u1=W1,u2=W2`` (inputs left out: 1);
+    values are expressions (``1/10``), each positive and finite.
+
+    Raises
+    ------
+    OptionError
+        Malformed text, an unknown or repeated input, a weight not positive and finite.
+    """
+    from nilpotent.core.model.expressions import parse_expression, real_value
+    from nilpotent.core.model.points import check_magnitude
+    from nilpotent.planning.timing import input_names
+
+    names = input_names(system.m)
+
+    def number(piece: str) -> float:
+        if not piece.strip():
+            raise OptionError(f"--input-weights {text!r}: a weight is missing")
+        value = check_magnitude(real_value(parse_expression(piece, {}, where="--input-weights"),
+                                           where="--input-weights"), "--input-weights")
+        if not (math.isfinite(value) and value > 0):
+            raise OptionError(f"--input-weights: a weight must be a positive number, got "
+                              f"{value:g}")
+        return value
+
+    if "=" not in text:
+        return (number(text),) * system.m
+    named: dict[str, float] = {}
+    for part in text.split(","):
+        name, eq, value = part.partition("=")
+        name = name.strip()
+        if not (eq and name):
+            raise OptionError(f"--input-weights {text!r}: expected W or u1=W1,u2=W2")
+        if name not in names:
+            raise OptionError(f"--input-weights: unknown input {name[:40]!r} (inputs: "
+                              f"{', '.join(names)})")
+        if name in named:
+            raise OptionError(f"--input-weights: {name} given twice")
+        named[name] = number(value)
+    return tuple(named.get(k, 1.0) for k in names)
+
+
+def refine_from_options(refine: str, system, seed: int, input_weights: str | None,
+                        refine_starts: int | None, reversal_cost: float | None):
+    """``--refine`` with ``--input-weights``, ``--refine-starts``, ``--reversal-cost``: the
+    refinement's name, or its :class:`~nilpotent.planning.ocp.OcpRefine` options.
+
+    Raises
+    ------
+    OptionError
+        One of the three without ``--refine ocp``; a value out of range; a reversal cost
+        for a model without a drive input.
+    """
+    from nilpotent.planning.ocp import MAX_STARTS, OcpRefine
+    from nilpotent.planning.timing import drive_reversals
+
+    given = [name for name, v in (("--input-weights", input_weights),
+                                  ("--refine-starts", refine_starts),
+                                  ("--reversal-cost", reversal_cost)) if v is not None]
+    if not given:
+        return refine
+    if refine != "ocp":
+        raise OptionError(f"{given[0]} needs --refine ocp (it sets how the optimal-control "
+                          "refinement runs)")
+    if refine_starts is not None and not 1 <= refine_starts <= MAX_STARTS:
+        raise OptionError(f"--refine-starts must be an integer from 1 to {MAX_STARTS}; got "
+                          f"{refine_starts}")
+    if reversal_cost and drive_reversals(system, ()) is None:
+        raise OptionError(f"--reversal-cost: model {system.name} has no drive input "
+                          "(vehicle models only: a unicycle, a car, a car with trailers)")
+    weights = None if input_weights is None else parse_weights_option(input_weights, system)
+    return OcpRefine(input_weights=weights, starts=refine_starts or 1,
+                     reversal_cost=reversal_cost or 0.0, seed=seed)
+
+
 def parse_bound_option(text: str | None, system, option: str, *, every: bool = False
                        ) -> tuple[float, ...] | None:
     """``--max-speed``/``--max-accel``: ``V`` (every input) or ``u1=V1,u2=V2``; values are
