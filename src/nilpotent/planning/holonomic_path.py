@@ -24,11 +24,21 @@ SIMPLIFY_SECONDS = 0.5
 def box(
     checker: Checker, x0: np.ndarray, xg: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The configuration-space box OMPL samples in (limits, world bounds, else around the chord)."""
+    """The configuration-space box OMPL samples in: the limits, the world's bounds for ``x``
+    and ``y``; else around the two configurations, by half the chord (at least π) for ``x``
+    and ``y`` and by half the coordinate's own change (at least π) for the others.
+
+    An unlimited heading gets ``[min − π, max + π]`` (every direction between, the full
+    turn on either side), not half the chord: a trident crossing a 14 wide world once
+    searched a heading range 23 rad wide, mostly turns it never needed (issue 20).
+    """
     names = checker.system.coordinate_names
     lo = np.minimum(x0, xg)
     hi = np.maximum(x0, xg)
-    pad = np.maximum(math.pi, 0.5 * float(np.linalg.norm(xg - x0)))
+    pad = np.maximum(math.pi, 0.5 * np.abs(xg - x0))
+    for name in ("x", "y"):
+        if name in names:
+            pad[names.index(name)] = max(math.pi, 0.5 * float(np.linalg.norm(xg - x0)))
     lo, hi = lo - pad, hi + pad
     world = checker.world
     if world is not None and world.bounds is not None:

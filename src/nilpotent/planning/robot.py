@@ -197,11 +197,14 @@ class Robot:
                 raise ModelError(f"model {self.system.name}: the outline [geometry] cannot be "
                                  f"evaluated ({type(exc).__name__}: {exc})") from None
             out = np.empty((q.shape[0], len(vals)))
-            for i, v in enumerate(vals):
-                # constants (a disc's radius) broadcast; a value with an imaginary part
-                # (``sqrt(p)`` with a parameter p < 0) is no real coordinate: NaN, not
-                # its real part
-                out[:, i] = _real_or_nan(v)
+            if isinstance(vals, np.ndarray) and vals.dtype.kind == "f":
+                out[:] = vals.T  # one real array (the common case: no per-column work)
+            else:
+                for i, v in enumerate(vals):
+                    # constants (a disc's radius) broadcast; a value with an imaginary part
+                    # (``sqrt(p)`` with a parameter p < 0) is no real coordinate: NaN, not
+                    # its real part
+                    out[:, i] = _real_or_nan(v)
         bad = ~np.isfinite(out)
         if bad.any():
             row, col = (int(k[0]) for k in np.nonzero(bad))
