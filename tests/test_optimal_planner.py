@@ -164,3 +164,28 @@ def test_car_rrtstar_plan_in_a_world_replays_collision_free():
     assert not inside.any()
     assert np.all((pts[:, 0] > -2) & (pts[:, 0] < 7) & (pts[:, 1] > -2.5) & (pts[:, 1] < 2.5))
     assert out["reversals"] == drive_sign_changes(out["segments"])
+
+
+@pytest.mark.slow
+def test_execute_with_rrtstar_replans_with_it():
+    """``execute --planner rrtstar``: the execution reports the planner, succeeds under
+    measurement noise, and the applied controls re-simulated independently on the model
+    end within the tolerance of the goal, inside the limits.  (RRT* improves its path for a
+    share of the time limit, hence a limit of 40 s: ~10 s of improvement, the rest spare.)"""
+    result = CliRunner().invoke(app, [
+        "execute", "unicycle", "--to", "x=3,y=0.6", "--limit", "theta=-1:1", "--limit",
+        "y=-1:1", "--planner", "rrtstar", "--noise", "1e-5", "--time-limit", "40", "--json"])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    assert out["planner"] == "rrtstar" and out["success"] is True
+    q = resimulate(get_model("unicycle"), out["from"], out["closed_loop"]["segments"],
+                   samples=100)
+    assert np.linalg.norm(q[-1] - np.array([3.0, 0.6, 0.0])) <= 1e-3 + 1e-4
+    assert np.abs(q[:, 1]).max() <= 1 + 1e-6 and np.abs(q[:, 2]).max() <= 1 + 1e-6
+
+
+def test_execute_refuses_an_unknown_planner():
+    result = CliRunner().invoke(app, ["execute", "unicycle", "--to", "x=1", "--planner",
+                                      "prm", "--json"])
+    assert result.exit_code == 2
+    assert "--planner must be" in json.loads(result.stdout)["error"]["message"]

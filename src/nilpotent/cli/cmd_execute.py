@@ -30,6 +30,7 @@ from nilpotent.cli.plan_options import (
     LimitOpt,
     MarginOpt,
     MaxPieceOpt,
+    PlannerOpt,
     SeedOpt,
     TimeLimitOpt,
     ToOpt,
@@ -95,6 +96,7 @@ def execute_command(
     time_limit: TimeLimitOpt = 60.0,
     seed: SeedOpt = 0,
     max_piece: MaxPieceOpt = 1.0,
+    planner: PlannerOpt = "rrtconnect",
     mismatch: MismatchOpt = None,
     noise: NoiseOpt = 0.0,
     tol: ExecTolOpt = 1e-3,
@@ -128,11 +130,16 @@ def execute_command(
     goal = parse_point_option(to, system, option="--to")
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")
+    from nilpotent.planning.optimal_planner import PLANNERS
+
+    if planner not in PLANNERS:
+        raise OptionError(
+            f"--planner must be {' or '.join(PLANNERS)}; got {literal(planner, 60)!r}")
     with command_budget(time_limit):  # one limit for planning and execution together
         with work(f"plan {system.name}"):
             glob = plan_from_options(system, start, goal, min(1e-8, tol), world, limit,
                                      singular_margin, time_limit, seed, max_piece,
-                                     clearance=clearance)
+                                     clearance=clearance, planner=planner)
         with work(f"execute on the perturbed {system.name}"):
             result = execute_plan(glob, fractions, noise, seed, tol, max_corrections,
                                   time_limit)

@@ -138,7 +138,8 @@ class Execution:
         return self.closed_loop.error <= self.tol and not self.violations
 
     def to_json(self) -> dict[str, Any]:
-        """``nilpotent/execution@1``: settings, closed- and open-loop errors and violations."""
+        """``nilpotent/execution@1``: settings (``planner``: the holonomic stage of the plan
+        and of every re-plan), closed- and open-loop errors and violations."""
         def block(v: Verification, violations: tuple[str, ...]) -> dict[str, Any]:
             return {"reached": list(v.reached), "error": v.error, "clearance": v.clearance,
                     "limits_ok": v.limits_ok, "limit_margin": v.limit_margin,
@@ -154,6 +155,7 @@ class Execution:
             "from": list(self.plan.plan.start),
             "to": list(self.plan.plan.goal),
             "world": None if self.plan.world is None else self.plan.world.name,
+            "planner": self.plan.planner,
             "mismatch": self.mismatch,
             "noise": self.noise,
             "seed": self.seed,
@@ -276,7 +278,8 @@ def _execute(
             )
         g = plan_global(model, x_meas, target, piece_tol, world=glob.world, limits=glob.limits,
                         singular_margin=glob.singular_margin, time_limit=time_limit,
-                        seed=seed, clearance=glob.clearance_required, settings=settings)
+                        seed=seed, clearance=glob.clearance_required, settings=settings,
+                        planner=glob.planner)
         return list(g.plan.segments)
 
     x = x0.copy()
