@@ -275,7 +275,8 @@ def test_bad_refinement_options_are_option_errors() -> None:
 
     for bad in ({"starts": 0}, {"starts": 10**6}, {"reversal_cost": -1.0},
                 {"reversal_cost": float("nan")}, {"input_weights": (1.0, 0.0)},
-                {"input_weights": (1.0, float("inf"))}, {"input_weights": ()}):
+                {"input_weights": (1.0, float("inf"))}, {"input_weights": ()},
+                {"smooth": "yes"}):
         with pytest.raises(OptionError):
             OcpRefine(**bad)  # type: ignore[arg-type]
     with pytest.raises(OptionError, match="2 inputs"):
@@ -326,6 +327,7 @@ def test_car_with_cheap_steering_and_several_starts_is_near_reeds_shepp() -> Non
     (["--input-weights", "u2=1/10"], "--input-weights needs --refine ocp"),
     (["--refine-starts", "2"], "--refine-starts needs --refine ocp"),
     (["--reversal-cost", "1"], "--reversal-cost needs --refine ocp"),
+    (["--refine-smooth"], "--refine-smooth needs --refine ocp"),
     (["--refine", "ocp", "--input-weights", "u3=1"], "unknown input 'u3'"),
     (["--refine", "ocp", "--input-weights", "u2=0"], "a weight must be a positive number"),
     (["--refine", "ocp", "--input-weights", "-1"], "a weight must be a positive number"),
@@ -392,3 +394,55 @@ def test_cli_reversal_cost_on_a_vehicle_is_reported(run_cli) -> None:
         assert ref["cost_refined"] == pytest.approx(
             ref["length_refined"] + 1.5 * data["reversals"], rel=1e-9)
         assert ref["cost_refined"] <= ref["cost_before"]
+
+
+# --- smooth controls (cosine series) ------------------------------------------------------
+
+
+@needs_casadi
+def test_smooth_heisenberg_controls_are_one_segment_at_the_closed_form_length() -> None:
+    """``smooth``: one segment of cosine-series inputs whose length is Dido's distance to
+    1e-3 (a truncated series of the geodesic's sinusoidal inputs), re-simulated
+    independently to the goal."""
+    from nilpotent.planning.ocp import OcpRefine
+
+    h = get_model("heisenberg")
+    goal = (0.5, 0.3, 0.4)
+    warm = plan(h, (0, 0, 0), goal)
+    segs, info = refine_segments(Checker(h), (0, 0, 0), goal, warm.segments, 1e-8,
+                                 options=OcpRefine(smooth=True))
+    assert info.applied and info.controls == "cosine series", (info.reason, info.smooth_reason)
+    assert len(segs) == 1 and segs[0].omega == pytest.approx(math.pi)
+    d = heisenberg_distance(*goal)
+    assert d * (1 - 1e-9) <= control_length(segs) <= d * (1 + 1e-3)
+    states = resimulate(h, (0, 0, 0), segment_dicts(segs))
+    assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-7
+    assert info.to_json()["controls"] == "cosine series"
+
+
+@needs_casadi
+@pytest.mark.slow
+def test_smooth_car_keeps_its_steering_limit_and_re_times_with_two_stops() -> None:
+    """The car with smooth refined controls: re-simulated independently, within
+    ``|φ| ≤ atan 0.6`` and at the goal; re-timed under speed and acceleration bounds it
+    rests only at its ends and where the drive input reverses (inputs continuous)."""
+    from nilpotent.planning.ocp import OcpRefine
+    from nilpotent.planning.timing import input_reversals
+
+    car = get_model("car")
+    goal = (0.5, 0.5, 0.8, 0.0)
+    g = plan_global(car, (0, 0, 0, 0), goal, 1e-8, objective="length", time_limit=900,
+                    refine=OcpRefine(input_weights=(1.0, 0.1), smooth=True),
+                    max_speed=[1.0, math.inf], max_accel=[2.0, 4.0])
+    assert g.refinement is not None and g.refinement.applied, g.refinement
+    assert g.refinement.controls == "cosine series", g.refinement.smooth_reason
+    assert len(g.plan.segments) == 1
+    states = resimulate(car, (0, 0, 0, 0), segment_dicts(g.plan.segments), samples=2000)
+    assert np.linalg.norm(states[-1] - np.array(goal)) <= 1e-6
+    assert np.abs(states[:, 3]).max() <= math.atan(0.6) + 1e-9
+    timed = g.timed
+    assert timed is not None
+    assert len(timed.stops) <= 2 + sum(input_reversals(g.plan.segments))
+    u = timed.inputs
+    assert np.all(np.abs(np.diff(u, axis=0)) / np.diff(timed.times)[:, None]
+                  <= np.array([2.0, 4.0]) * 1.05)

@@ -41,6 +41,7 @@ from nilpotent.cli.plan_options import (
     MaxPieceOpt,
     MaxSpeedOpt,
     PlannerOpt,
+    RefineSmoothOpt,
     RefineStartsOpt,
     ReversalCostOpt,
     SeedOpt,
@@ -191,6 +192,7 @@ def plan_command(
     input_weights: InputWeightsOpt = None,
     refine_starts: RefineStartsOpt = None,
     reversal_cost: ReversalCostOpt = None,
+    refine_smooth: RefineSmoothOpt = False,
     max_speed: MaxSpeedOpt = None,
     max_accel: MaxAccelOpt = None,
     trajectory_out: TrajectoryOutOpt = None,
@@ -238,7 +240,7 @@ def plan_command(
     start = parse_point_option(from_, system, option="--from")
     goal = parse_point_option(to, system, option="--to")
     refine_how = refine_from_options(refine, system, seed, input_weights, refine_starts,
-                                     reversal_cost)
+                                     reversal_cost, refine_smooth)
     speed = parse_bound_option(max_speed, system, "--max-speed")
     accel = parse_bound_option(max_accel, system, "--max-accel", every=True)
     if accel is None and (speed is not None or trajectory_out is not None

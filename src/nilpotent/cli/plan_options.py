@@ -149,6 +149,15 @@ ReversalCostOpt = Annotated[
 ]
 
 
+RefineSmoothOpt = Annotated[
+    bool,
+    typer.Option("--refine-smooth",
+                 help="With --refine ocp: each input a cosine series (one segment, inputs "
+                      "continuous: a re-timed trajectory rests only at the ends and at "
+                      "reversals) instead of 48 constant pieces."),
+]
+
+
 def parse_weights_option(text: str, system) -> tuple[float, ...]:
     """``--input-weights``: ``W`` (every input) or ``u1=W1,u2=W2`` (inputs left out: 1);
     values are expressions (``1/10``), each positive and finite.
@@ -192,9 +201,11 @@ def parse_weights_option(text: str, system) -> tuple[float, ...]:
 
 
 def refine_from_options(refine: str, system, seed: int, input_weights: str | None,
-                        refine_starts: int | None, reversal_cost: float | None):
-    """``--refine`` with ``--input-weights``, ``--refine-starts``, ``--reversal-cost``: the
-    refinement's name, or its :class:`~nilpotent.planning.ocp.OcpRefine` options.
+                        refine_starts: int | None, reversal_cost: float | None,
+                        smooth: bool = False):
+    """``--refine`` with ``--input-weights``, ``--refine-starts``, ``--reversal-cost``,
+    ``--refine-smooth``: the refinement's name, or its
+    :class:`~nilpotent.planning.ocp.OcpRefine` options.
 
     Raises
     ------
@@ -207,7 +218,9 @@ def refine_from_options(refine: str, system, seed: int, input_weights: str | Non
 
     given = [name for name, v in (("--input-weights", input_weights),
                                   ("--refine-starts", refine_starts),
-                                  ("--reversal-cost", reversal_cost)) if v is not None]
+                                  ("--reversal-cost", reversal_cost),
+                                  ("--refine-smooth", True if smooth else None))
+             if v is not None]
     if not given:
         return refine
     if refine != "ocp":
@@ -221,7 +234,7 @@ def refine_from_options(refine: str, system, seed: int, input_weights: str | Non
                           "(vehicle models only: a unicycle, a car, a car with trailers)")
     weights = None if input_weights is None else parse_weights_option(input_weights, system)
     return OcpRefine(input_weights=weights, starts=refine_starts or 1,
-                     reversal_cost=reversal_cost or 0.0, seed=seed)
+                     reversal_cost=reversal_cost or 0.0, seed=seed, smooth=smooth)
 
 
 def parse_bound_option(text: str | None, system, option: str, *, every: bool = False

@@ -82,6 +82,7 @@ from nilpotent.planning.casadi_tree import casadi_module
 from nilpotent.planning.casadi_tree import to_casadi as to_casadi
 from nilpotent.planning.controls import Segment, constant_segment
 from nilpotent.planning.geodesic import control_length
+from nilpotent.planning.ocp_smooth import limit_constraints, smooth_controls
 from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_candidates
 from nilpotent.planning.timing import drive_reversals
 from nilpotent.planning.verify import Checker, Verification, verify_segments
@@ -102,6 +103,9 @@ SUBSTEPS = 4
 #: correction and for the motion between RK4 sub-step states.
 LIMIT_MARGIN = 1e-6
 #: Most IPOPT iterations, and most Gauss–Newton steps of the endpoint correction.
+#: The same for smooth controls (:attr:`OcpRefine.smooth`): a cosine series rings between
+#: the states the limits are imposed at (measured: 2e-4 past a steering limit at 1e-6).
+SMOOTH_LIMIT_MARGIN = 2e-3
 IPOPT_ITERATIONS = 500
 CORRECTIONS = 8
 #: Samples per segment of the verification (as the global planner's).
@@ -134,6 +138,12 @@ class OcpRefine:
         cost by which the candidates and the nilpotent plan are compared.
     seed : int
         Seed of the perturbed starts (the plan's ``seed``).
+    smooth : bool
+        Solve each candidate once more with every input a cosine series of
+        :data:`~nilpotent.planning.ocp_smooth.HARMONICS` harmonics
+        (:mod:`nilpotent.planning.ocp_smooth`): one segment whose inputs are continuous,
+        so that a re-timed trajectory rests only at the ends and at reversals; where that
+        fails the piecewise-constant candidate stays (``smooth_reason`` says why).
 
     Raises
     ------
@@ -146,8 +156,11 @@ class OcpRefine:
     starts: int = 1
     reversal_cost: float = 0.0
     seed: int = 0
+    smooth: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.smooth, bool):
+            raise OptionError(f"smooth must be True or False; got {self.smooth!r}")
         if self.input_weights is not None:
             bad = [w for w in self.input_weights if not (math.isfinite(w) and w > 0)]
             if bad or not self.input_weights:
@@ -212,6 +225,11 @@ class Refinement:
     cost_before, cost_refined : float or None
         Length plus ``reversal_cost`` times the drive reversals, of the nilpotent plan
         and of the refined controls (``None`` when there are none).
+    controls : str
+        ``"piecewise constant"`` (``intervals`` constant segments) or ``"cosine series"``
+        (one segment, :attr:`OcpRefine.smooth`).
+    smooth_reason : str
+        Why smooth controls were asked for and not kept (``""`` otherwise).
     verification : Verification or None
         The dense re-simulation of the refined controls when they were applied (the
         plan's own verification; not in :meth:`to_json`).
@@ -233,6 +251,8 @@ class Refinement:
     reversal_cost: float = 0.0
     cost_before: float | None = None
     cost_refined: float | None = None
+    controls: str = "piecewise constant"
+    smooth_reason: str = ""
     verification: Verification | None = field(default=None, repr=False, compare=False)
 
     def to_json(self) -> dict[str, Any]:
@@ -246,7 +266,8 @@ class Refinement:
             "input_weights": None if self.input_weights is None else list(self.input_weights),
             "starts": self.starts, "candidates": self.candidates,
             "reversal_cost": self.reversal_cost, "cost_before": self.cost_before,
-            "cost_refined": self.cost_refined,
+            "cost_refined": self.cost_refined, "controls": self.controls,
+            "smooth_reason": self.smooth_reason,
         })
 
 
@@ -323,15 +344,6 @@ def _problem(ca: Any, system: ControlSystem, n_int: int) -> Any:
     return ca.Function("step", [x, u], [z, ca.horzcat(*subs)])
 
 
-def _pads(lo: float, hi: float, ends: np.ndarray) -> tuple[float, float]:
-    """How much the limits ``[lo, hi]`` are tightened: :data:`LIMIT_MARGIN` (times
-    ``max(1, hi − lo)``), less where the start or the goal (values ``ends``) is closer to
-    the limit (an end on a limit keeps it exactly, or the problem would be infeasible)."""
-    pad = LIMIT_MARGIN * max(1.0, hi - lo)
-    return (max(0.0, min(pad, float(np.min(ends)) - lo)),
-            max(0.0, min(pad, hi - float(np.max(ends)))))
-
-
 def _scaled(segments: Sequence[Segment], w: np.ndarray) -> list[Segment]:
     """``segments`` with input ``i`` multiplied by ``w[i]`` (their weighted length is
     :func:`~nilpotent.planning.geodesic.control_length` of these)."""
@@ -374,14 +386,6 @@ def _solve(
     :func:`_problem`, built once per refinement (built here when ``None``)."""
     if step is None:
         step = _problem(ca, system, n_int)
-    limits = checker.limits
-    assert limits is not None
-    rel = None
-    if limits.relative:
-        x = ca.SX.sym("x", system.n)
-        symbols = {c: x[i] for i, c in enumerate(system.coordinates)}
-        rel = ca.Function("g", [x], [ca.vertcat(*[to_casadi(e, symbols)
-                                                  for _, e, _, _ in limits.relative])])
     opti = ca.Opti()
     xs = opti.variable(system.n, n_int + 1)
     us = opti.variable(system.m, n_int)
@@ -391,18 +395,7 @@ def _solve(
     opti.subject_to(xs[:, 0] == x0)
     opti.subject_to(xs[:, n_int] == xg)
     opti.subject_to(xs[:, 1:] == nxt)
-    names = system.coordinate_names
-    for name, lo, hi in limits.bounds:
-        j = names.index(name)
-        ends = np.array([x0[j], xg[j]])
-        pad_lo, pad_hi = _pads(lo, hi, ends)
-        opti.subject_to(opti.bounded(lo + pad_lo, subs[j, :], hi - pad_hi))
-    if rel is not None:
-        values = rel.map(subs.shape[1])(subs)
-        at_ends = np.array(rel.map(2)(np.column_stack([x0, xg])), dtype=float)
-        for r, (_, _, lo, hi) in enumerate(limits.relative):
-            pad_lo, pad_hi = _pads(lo, hi, at_ends[r])
-            opti.subject_to(opti.bounded(lo + pad_lo, values[r, :], hi - pad_hi))
+    limit_constraints(ca, opti, system, checker, x0, xg, subs, LIMIT_MARGIN)
     # warm start: the nilpotent plan's controls and their RK4 roll-out (or given states)
     if states0 is None:
         roll = step.mapaccum(n_int)(x0, u0)
@@ -573,32 +566,59 @@ def refine_segments(
             reasons.append(f"the re-simulated refined controls miss the goal by {err:.3g} > "
                            f"tol {tol:g}")
             continue
-        found.append((cost_of(refined, after), after, err, refined, dict(solved)))
+        found.append((cost_of(refined, after), after, err, refined, dict(solved), u))
     common["candidates"] = len(found)
     if not found:
         return keep(reasons[0] if len(set(reasons)) == 1 else
                     f"no start gave a candidate: {'; '.join(dict.fromkeys(reasons))}"[:400],
                     **solved)
     found.sort(key=lambda c: c[0])
-    for cost, _after, _err, refined, info in found:
-        info["cost_refined"] = cost
-        v = verify_segments(checker, x0, refined, xg, VERIFY_POINTS, settings)
-        if not v.admissible:
-            why = checker.why_invalid(v.states[int(np.argmin(
-                checker.valid(v.states)))]) or "not admissible between samples"
-            reasons = [f"the refined motion is not admissible: {why}"]
-        elif not v.error <= tol:
-            reasons = [f"the refined plan misses the goal by {v.error:.3g} > tol {tol:g} "
-                       "(dense re-simulation)"]
-        elif not cost < common["cost_before"]:  # the cheapest admissible one is not cheaper
-            what = "shorter" if opts.reversal_cost == 0 else "cheaper (length + reversals)"
-            return keep(f"not {what}: {cost:.6g} against {common['cost_before']:.6g}", **info)
-        else:
-            return refined, Refinement("ocp", True, "", before, intervals=intervals,
-                                       seconds=time.perf_counter() - t0, verification=v,
-                                       **common, **info)
-        solved = info
+    for cost, _after, _err, refined, info, u in found:
+        variants = [(refined, cost, info)]
+        if opts.smooth:  # the cosine series first, the piecewise-constant candidate after
+            variants[:0] = _smoothed(ca, checker, x0, xg, u, w, tol, settings, info,
+                                     length_of, cost_of)
+        for segs, c, inf in variants:
+            inf["cost_refined"] = c
+            v = verify_segments(checker, x0, segs, xg, VERIFY_POINTS, settings)
+            if not v.admissible:
+                why = checker.why_invalid(v.states[int(np.argmin(
+                    checker.valid(v.states)))]) or "not admissible between samples"
+                reasons = [f"the refined motion is not admissible: {why}"]
+            elif not v.error <= tol:
+                reasons = [f"the refined plan misses the goal by {v.error:.3g} > tol {tol:g} "
+                           "(dense re-simulation)"]
+            elif not c < common["cost_before"]:  # the cheapest admissible is not cheaper
+                what = "shorter" if opts.reversal_cost == 0 else "cheaper (length + reversals)"
+                return keep(f"not {what}: {c:.6g} against {common['cost_before']:.6g}", **inf)
+            else:
+                return segs, Refinement("ocp", True, "", before, intervals=intervals,
+                                        seconds=time.perf_counter() - t0, verification=v,
+                                        **common, **inf)
+            if inf is not info:  # the smooth variant failed: the piecewise one says why
+                info["smooth_reason"] = reasons[0]
+            solved = inf
     return keep(reasons[0], **solved)
+
+
+def _smoothed(ca: Any, checker: Checker, x0: np.ndarray, xg: np.ndarray, u: np.ndarray,
+              w: np.ndarray, tol: float, settings: IntegrationSettings, info: dict[str, Any],
+              length_of: Any, cost_of: Any) -> list[tuple[list[Segment], float, dict[str, Any]]]:
+    """The cosine-series variant ``[(segments, cost, info)]`` of a candidate
+    (:func:`smooth_controls`; limits tightened by :data:`SMOOTH_LIMIT_MARGIN`: a series
+    rings between the grid's states), or ``[]`` with ``info["smooth_reason"]`` set."""
+    seg, err, why = smooth_controls(
+        ca, checker, x0, xg, u, None, w, tol, settings, substeps=SUBSTEPS,
+        margin=SMOOTH_LIMIT_MARGIN, iterations=IPOPT_ITERATIONS, corrections=CORRECTIONS,
+        share=0.5)
+    if seg is None or not err <= tol:
+        info["smooth_reason"] = why or (f"the re-simulated cosine-series controls miss the "
+                                        f"goal by {err:.3g} > tol {tol:g}")
+        return []
+    length = length_of([seg])
+    return [([seg], cost_of([seg], length),
+             {**info, "controls": "cosine series", "length_refined": length,
+              "refined_error": err, "smooth_reason": ""})]
 
 
 def refine_route(
