@@ -20,6 +20,9 @@ Methods, same time budget per query, same pairs:
   (verified: re-simulated, admissible, within ``TOL``);
 * ``rrtstar``: the same with ``planner="rrtstar"`` (OMPL RRT* under the ball–box cost,
   :mod:`nilpotent.planning.optimal_planner`);
+* ``guide`` (``car`` only): the same with ``planner="reeds-shepp"`` (an OMPL Reeds–Shepp
+  path lifted to the car's configurations and steered piece by piece,
+  :mod:`nilpotent.planning.guide`);
 * ``rs`` (``car`` only): OMPL RRT* in ``ReedsSheppStateSpace(rmin)`` (``rmin`` the model's
   parameter), the same validity check (the car's outline with ``φ = 0``) at the
   resolution of OMPL's default; it runs the whole budget (anytime) and the time reported
@@ -43,7 +46,7 @@ world, 10 s each, the worlds ``corner,car-parking,corridor,parking,parking2`` an
 before timing.
 
 Usage: ``PYTHONPATH=src python benchmarks/plan_world.py [--pairs 50] [--time-limit 20]
-[--worlds doorway,parking] [--methods ours,rrtstar,rs,krrt] [--quick] [--markdown]``.
+[--worlds doorway,parking] [--methods ours,rrtstar,guide,rs,krrt] [--quick] [--markdown]``.
 """
 
 from __future__ import annotations
@@ -383,13 +386,14 @@ def main() -> None:
         plan_global(system, pairs[0][0], pairs[0][0] + 1e-3 * (pairs[0][1] - pairs[0][0]), TOL,
                     world=world, engine=ENGINE, time_limit=600)
         for method in args.methods.split(","):
-            if method == "rs" and system.name != "car":
+            if method in ("rs", "guide") and system.name != "car":
                 continue
             rows = []
             for k, (a, b) in enumerate(pairs):
                 seed = args.seed + k
-                if method in ("ours", "rrtstar"):
-                    planner = "rrtconnect" if method == "ours" else "rrtstar"
+                if method in ("ours", "rrtstar", "guide"):
+                    planner = {"ours": "rrtconnect", "rrtstar": "rrtstar",
+                               "guide": "reeds-shepp"}[method]
                     rows.append(run_ours(system, world, checker, a, b, args.time_limit, seed,
                                          planner))
                 elif method == "rs":

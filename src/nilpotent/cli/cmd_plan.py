@@ -204,8 +204,8 @@ def plan_command(
     """Steer MODEL from --from to --to within its limits and around the --world's obstacles.
 
     Small problems are solved by iterated exact steering of nilpotent
-    approximations; otherwise a collision-free path from OMPL (RRTConnect, or RRT* with
-    --planner rrtstar) is
+    approximations; otherwise a collision-free path from OMPL (RRTConnect, RRT* with
+    --planner rrtstar, or a Reeds-Shepp path for a car with --planner reeds-shepp) is
     steered piece by piece, halving pieces whose motion leaves the free space.
     Every plan is re-simulated densely and checked (clearance, limits, error).
     --json gives the controls as segments (schema nilpotent/plan@1):
@@ -228,7 +228,8 @@ def plan_command(
             f"--objective must be {' or '.join(OBJECTIVES)}; got {literal(objective, 60)!r}")
     if planner not in PLANNERS:
         raise OptionError(
-            f"--planner must be {' or '.join(PLANNERS)}; got {literal(planner, 60)!r}")
+            f"--planner must be {', '.join(PLANNERS[:-1])} or {PLANNERS[-1]}; "
+            f"got {literal(planner, 60)!r}")
     check_refine(refine)
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise OptionError(f"--time-limit must be a positive number of seconds, got {time_limit}")

@@ -68,8 +68,9 @@ PlannerOpt = Annotated[
     str,
     typer.Option("--planner", metavar="NAME",
                  help="Holonomic stage: rrtconnect (OMPL RRTConnect, shortest Euclidean path; "
-                      "default) or rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
-                      "anytime)."),
+                      "default), rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
+                      "anytime) or reeds-shepp (car-like models: an OMPL Reeds-Shepp path "
+                      "lifted to the car's configurations)."),
 ]
 
 SeedOpt = Annotated[

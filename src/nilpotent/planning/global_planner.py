@@ -152,8 +152,8 @@ class GlobalPlan(PlanFigure):
         The plan re-timed under the input bounds of :func:`plan_global`
         (:func:`~nilpotent.planning.timing.retime`), or ``None`` when none were given.
     planner, path_cost, cost_history:
-        The holonomic stage (``"rrtconnect"``, ``"rrtstar"``); for ``"rrtstar"`` its path's
-        ball–box cost and the best ``(seconds, cost)`` after each slice.
+        The holonomic stage (``optimal_planner.PLANNERS``); its path's ball–box cost
+        (rrtstar) or Reeds–Shepp length (reeds-shepp), the best ``(seconds, cost)`` per slice.
     """
 
     plan: Plan
@@ -481,7 +481,8 @@ def plan_global(
         Largest time between the samples of the re-timed motion (default: its
         duration / 500).
     planner:
-        ``"rrtconnect"`` or ``"rrtstar"`` (:mod:`nilpotent.planning.optimal_planner`).
+        ``"rrtconnect"``, ``"rrtstar"`` (:mod:`nilpotent.planning.optimal_planner`) or
+        ``"reeds-shepp"`` (car-like models: :mod:`nilpotent.planning.guide`).
 
     Raises
     ------
@@ -566,7 +567,7 @@ def _plan_global(
             "raise --max-piece or plan to a nearer goal"
         )
 
-    stage = HolonomicStage(planner, max_piece)  # the OMPL stage (path and its cost)
+    stage = HolonomicStage(planner, max_piece, checker)  # the OMPL stage (path, cost)
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:

@@ -65,7 +65,7 @@ __all__ = [
 
 #: Global planners of :func:`~nilpotent.planning.global_planner.plan_global`: the holonomic
 #: stage's OMPL planner.
-PLANNERS = ("rrtconnect", "rrtstar")
+PLANNERS = ("rrtconnect", "rrtstar", "reeds-shepp")
 #: The share of its time that RRT* spends improving its first path (:class:`HolonomicStage`).
 IMPROVE_FRACTION = 0.5
 #: Constant of the weight ≥ 2 terms of the ball–box cost (module doc).
@@ -313,34 +313,53 @@ class HolonomicStage:
     planner of :data:`PLANNERS`: :meth:`path` has the signature of
     :func:`~nilpotent.planning.holonomic_path.ompl_path` (``seconds`` its 4th argument);
     for ``"rrtstar"`` it runs :func:`optimal_path` (improving for :data:`IMPROVE_FRACTION`
-    of its time, edges cut into pieces of ``piece``) and keeps each result in ``found``.
+    of its time, edges cut into pieces of ``piece``), for ``"reeds-shepp"``
+    :func:`~nilpotent.planning.guide.guide_path` (car-like models only, checked here when
+    ``checker`` is given), and keeps each result in ``found``.
 
     Raises
     ------
     OptionError
-        An unknown planner.
+        An unknown planner, or ``"reeds-shepp"`` for a model that is not car-like.
     """
 
-    def __init__(self, planner: str, piece: float) -> None:
+    def __init__(self, planner: str, piece: float, checker: Checker | None = None) -> None:
         if planner not in PLANNERS:
             raise OptionError(f"unknown planner {planner!r} (choose from {', '.join(PLANNERS)})")
+        if planner == "reeds-shepp" and checker is not None:
+            from nilpotent.planning.guide import car_geometry
+
+            car_geometry(checker.system, checker)
         self.planner, self.piece = planner, piece
-        self.found: list[OptimalPath] = []
+        self.found: list[Any] = []
 
     def path(self, *args: Any, **kwargs: Any) -> list[np.ndarray]:
-        """The path from OMPL (RRTConnect, or RRT* under the ball–box cost)."""
+        """The path from OMPL (RRTConnect, RRT* under the ball–box cost, or the lifted
+        Reeds–Shepp guide)."""
         if self.planner == "rrtconnect":
             return ompl_path(*args, **kwargs)
+        if self.planner == "reeds-shepp":
+            from nilpotent.planning.guide import guide_path
+
+            guide = guide_path(*args, **kwargs)
+            self.found.append(guide)
+            return [np.array(p) for p in guide.points]
         best = optimal_path(*args, **kwargs, improve_seconds=IMPROVE_FRACTION * args[3],
                             piece=self.piece)
         self.found.append(best)
         return [np.array(p) for p in best.points]
 
     def fields(self) -> dict[str, Any]:
-        """``planner``, ``path_cost``, ``cost_history`` of the last path (for ``GlobalPlan``)."""
+        """``planner``, ``path_cost``, ``cost_history`` of the last path (for ``GlobalPlan``):
+        the ball–box cost (``"rrtstar"``) or the Reeds–Shepp length (``"reeds-shepp"``)."""
         last = self.found[-1] if self.found else None
-        return {"planner": self.planner, "path_cost": None if last is None else last.cost,
-                "cost_history": () if last is None else last.cost_history}
+        if last is None:
+            return {"planner": self.planner, "path_cost": None, "cost_history": ()}
+        if self.planner == "reeds-shepp":
+            return {"planner": self.planner, "path_cost": last.length,
+                    "cost_history": last.length_history}
+        return {"planner": self.planner, "path_cost": last.cost,
+                "cost_history": last.cost_history}
 
 
 def planner_json(planner: str, path_cost: float | None,

@@ -1,0 +1,343 @@
+r"""A Reeds–Shepp guide for car-like models: the holonomic stage ``planner="reeds-shepp"``.
+
+The holonomic stages of :mod:`nilpotent.planning.optimal_planner` plan in
+``(x, y, θ, φ)`` as if the car could move sideways; the nilpotent steering of
+each piece then has to make the sideways motion with manoeuvres that wander.
+For a car, the shortest paths of bounded curvature are known (Reeds & Shepp,
+"Optimal paths for a car that goes both forwards and backwards", Pacific J.
+Math. 145(2), 1990): this stage plans with them and hands the steering pieces
+the car can follow exactly.
+
+1. **Search** (:func:`guide_path`): OMPL RRT* (path length; after its first path it
+   improves it for half its time, at most :data:`IMPROVE_SECONDS`) in
+   ``ob.ReedsSheppStateSpace(r_g)``, ``r_g =`` :data:`RADIUS_FACTOR` × the car's
+   least turning radius (room for the steering to stay inside the ``φ`` limit),
+   bounds from the world (else the box of
+   :func:`~nilpotent.planning.holonomic_path.box`); a pose is valid when the
+   configuration ``(x, y, θ, φ)`` is, for each ``φ ∈ {−φ_g, 0, φ_g}``
+   (``φ_g = atan(L / r_g)``, every steering angle the lifted path can take),
+   under the planner's validity check.  The path is simplified by OMPL.
+2. **Lift** (:func:`lift`): the path, sampled every :data:`SAMPLE_STEP` of arc
+   length, is cut where its curvature ``κ ∈ {−1/r_g, 0, 1/r_g}`` or its direction of
+   travel changes; along each leg ``φ = atan(L κ)`` (``θ̇ = v tan φ / L``), with
+   waypoints every :data:`WAYPOINT_STEP`; where ``κ`` changes, two waypoints at the
+   same pose with the old and the new ``φ``: the car turns its wheels at rest (the
+   steering field ``∂_φ``).  The heading is unwrapped from the start's ``θ``.
+3. The waypoints are the path :func:`~nilpotent.planning.global_planner.plan_global`
+   steers piece by piece and verifies, as for the other holonomic stages.
+
+**Car-like** (:func:`car_geometry`): a model with coordinates named
+``x, y, theta, phi`` and two fields, ``X1 = cos θ ∂x + sin θ ∂y + (tan φ / L) ∂θ``
+(``L > 0`` a number, read from the field once the parameters are substituted) and
+``X2 = ∂φ``, with a limit ``|φ| ≤ φ_max < π/2`` (the built-in ``car``, whose default
+limit is ``atan(L / rmin)``, or a model file with the same fields); its least turning
+radius is ``L / tan φ_max`` (the smaller side of an asymmetric limit).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from nilpotent.core.model.system import ControlSystem
+from nilpotent.errors import OptionError, PlanningError
+from nilpotent.planning import budget
+from nilpotent.planning.holonomic_path import SIMPLIFY_SECONDS, box
+from nilpotent.planning.verify import Checker
+
+__all__ = [
+    "CAR_COORDINATES", "RADIUS_FACTOR", "CarGeometry", "GuidePath", "car_geometry",
+    "guide_path", "lift",
+]
+
+#: Coordinates of a car-like model, in order.
+CAR_COORDINATES = ("x", "y", "theta", "phi")
+#: Turning radius of the guide, as a multiple of the car's least one: room for the steered
+#: motion's overshoot of ``φ`` (1.05, ``φ_g`` 0.021 below the default limit, failed 3 of 4
+#: benchmark pairs at the limit; 1.2, 0.077 below, none).
+RADIUS_FACTOR = 1.2
+#: Arc length between the samples of the Reeds–Shepp path that are classified.
+SAMPLE_STEP = 0.01
+#: Largest arc length between two waypoints of one leg.
+WAYPOINT_STEP = 0.25
+#: Largest change of ``φ`` between two waypoints where the wheels turn at rest (the
+#: tolerance at a waypoint is a tenth of the piece: small turns leave the car on the path).
+PHI_STEP = 0.1
+#: Share of its time RRT* spends improving its first path, at most :data:`IMPROVE_SECONDS`
+#: (the steering needs the rest of a generous limit more than RRT* does).
+IMPROVE_FRACTION = 0.5
+IMPROVE_SECONDS = 3.0
+#: Length of one RRT* slice (seconds) between two records of the best length.
+SLICE_SECONDS = 0.25
+#: Largest step (length units) at which OMPL checks the poses along a motion.
+CHECK_STEP = 0.02
+
+
+@dataclass(frozen=True)
+class CarGeometry:
+    """What the guide needs of a car-like model.
+
+    Attributes
+    ----------
+    wheelbase:
+        ``L`` (rear axle to front axle).
+    phi_max:
+        The steering limit used, ``|φ| ≤ phi_max``.
+    """
+
+    wheelbase: float
+    phi_max: float
+
+    @property
+    def min_radius(self) -> float:
+        """The least turning radius of the rear axle's centre, ``L / tan φ_max``."""
+        return self.wheelbase / math.tan(self.phi_max)
+
+
+def car_geometry(system: ControlSystem, checker: Checker) -> CarGeometry:
+    """The wheelbase and steering limit of a car-like model (module doc), with the limits of
+    ``checker``.
+
+    Raises
+    ------
+    OptionError
+        The model is not car-like, or has no steering limit below ``π/2``.
+    """
+    why = _not_car_like(system)
+    if why:
+        raise OptionError(
+            f"--planner reeds-shepp needs a car-like model (coordinates x, y, theta, phi; "
+            f"fields cos(theta) d/dx + sin(theta) d/dy + tan(phi)/L d/dtheta and d/dphi, e.g. "
+            f"the built-in car): model {system.name} {why}")
+    fields = system.specialized_fields
+    theta, phi = system.coordinates[2], system.coordinates[3]
+    wheelbase = float(sp.simplify(sp.tan(phi) / fields[0][2]).subs(theta, 0))
+    assert checker.limits is not None
+    bounds = {name: (lo, hi) for name, lo, hi in checker.limits.bounds}
+    lo, hi = bounds.get("phi", (-math.inf, math.inf))
+    phi_max = min(-lo, hi)
+    if not (0.0 < phi_max < math.pi / 2):
+        raise OptionError(
+            f"--planner reeds-shepp needs a steering limit |phi| <= phi_max < pi/2 (a least "
+            f"turning radius); model {system.name} has phi in [{lo:g}, {hi:g}]")
+    return CarGeometry(wheelbase, phi_max)
+
+
+def _not_car_like(system: ControlSystem) -> str:
+    """Why ``system`` is not car-like ('' when it is)."""
+    if system.coordinate_names != CAR_COORDINATES:
+        return f"has coordinates {', '.join(system.coordinate_names)}"
+    if system.m != 2:
+        return f"has {system.m} fields, not 2"
+    _, _, theta, phi = system.coordinates
+    drive, steer = system.specialized_fields
+    if tuple(sp.sympify(c) for c in steer) != (0, 0, 0, 1):
+        return "has a second field other than d/dphi"
+    ratio = sp.simplify(sp.tan(phi) / drive[2]) if drive[2] != 0 else sp.nan
+    if (sp.simplify(drive[0] - sp.cos(theta)) != 0 or sp.simplify(drive[1] - sp.sin(theta)) != 0
+            or drive[3] != 0 or not ratio.is_number or not bool(ratio > 0)):
+        return "has a first field other than cos(theta), sin(theta), tan(phi)/L, 0 (L > 0)"
+    return ""
+
+
+@dataclass(frozen=True)
+class GuidePath:
+    """The lifted Reeds–Shepp path and how its length went down.
+
+    Attributes
+    ----------
+    points:
+        Waypoints ``(x, y, θ, φ)``, start and goal included.
+    length:
+        Length of the Reeds–Shepp path (rear axle; OMPL's, after simplification).
+    length_history:
+        ``(seconds since RRT* started, best length)`` after each slice with a solution.
+    radius:
+        The guide's turning radius ``r_g``.
+    """
+
+    points: tuple[tuple[float, ...], ...]
+    length: float
+    length_history: tuple[tuple[float, float], ...]
+    radius: float
+
+
+def guide_path(
+    checker: Checker,
+    x0: np.ndarray,
+    xg: np.ndarray,
+    seconds: float,
+    seed: int | None = None,
+    resolution: float = 0.05,
+    valid: Callable[[np.ndarray], np.ndarray] | None = None,
+    held: Sequence[int] = (),
+) -> GuidePath:
+    """The Reeds–Shepp guide from ``x0`` to ``xg`` (module doc), within ``seconds``.
+
+    Parameters as :func:`~nilpotent.planning.holonomic_path.ompl_path` (``held`` is
+    ignored: ``φ`` is set by the lifting, from ``x0``'s to ``xg``'s).
+
+    Raises
+    ------
+    OptionError
+        The model is not car-like.
+    PlanningError
+        No exact solution within ``seconds``, or a path whose heading turns by another
+        multiple of ``2π`` than the goal asks (``θ`` is a real number).
+    """
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    car = car_geometry(checker.system, checker)
+    radius = RADIUS_FACTOR * car.min_radius
+    phi_g = math.atan(car.wheelbase / radius)
+    is_valid = checker.valid if valid is None else valid
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    if seed is not None:
+        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
+    space = ob.ReedsSheppStateSpace(radius)
+    lo, hi = box(checker, x0, xg)
+    bounds = ob.RealVectorBounds(2)
+    for axis in range(2):
+        bounds.setLow(axis, float(lo[axis]))
+        bounds.setHigh(axis, float(hi[axis]))
+    space.setBounds(bounds)
+    si = ob.SpaceInformation(space)
+    steer = np.array([-phi_g, 0.0, phi_g])
+
+    def pose_valid(state: Any) -> bool:
+        q = np.empty((3, 4))
+        q[:, 0], q[:, 1], q[:, 2], q[:, 3] = state.getX(), state.getY(), state.getYaw(), steer
+        return bool(np.all(is_valid(q)))
+
+    si.setStateValidityChecker(pose_valid)
+    step = min(resolution, CHECK_STEP)
+    si.setStateValidityCheckingResolution(step / max(space.getMaximumExtent(), 1e-12))
+    si.setup()
+    start, goal = space.allocState(), space.allocState()
+    for st, q in ((start, x0), (goal, xg)):
+        st.setX(float(q[0]))
+        st.setY(float(q[1]))
+        st.setYaw(float(q[2]))
+    for what, st in (("start", start), ("goal", goal)):
+        if not pose_valid(st):
+            raise PlanningError(f"the {what}'s pose is not admissible for every steering angle "
+                                f"|phi| <= {phi_g:.3g} of the Reeds-Shepp guide")
+    pdef = ob.ProblemDefinition(si)
+    pdef.setStartAndGoalStates(start, goal)
+    pdef.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
+    planner = og.RRTstar(si)
+    planner.setProblemDefinition(pdef)
+    planner.setup()
+    t0 = time.perf_counter()
+    history: list[tuple[float, float]] = []
+    first: float | None = None
+    improve = min(IMPROVE_FRACTION * seconds, IMPROVE_SECONDS)
+    try:
+        while True:
+            spent = time.perf_counter() - t0
+            left = seconds - spent
+            if first is not None:
+                left = min(left, first + improve - spent)
+            if left <= 0:
+                break
+            budget.check("looking for a Reeds-Shepp path with OMPL RRT*")
+            planner.solve(float(min(SLICE_SECONDS, left)))
+            if pdef.hasExactSolution():
+                now = time.perf_counter() - t0
+                first = now if first is None else first
+                history.append((now, float(planner.bestCost().value())))
+        if first is None:
+            raise PlanningError(
+                f"no collision-free Reeds-Shepp path (radius {radius:.3g}) from OMPL RRT* "
+                f"within {seconds:.3g} s; raise --time-limit, or check that start and goal are "
+                "connected in the free space")
+        path: Any = og.PathGeometric(pdef.getSolutionPath())
+        og.PathSimplifier(si).simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))
+        length = float(path.length())
+        path.interpolate(max(2, math.ceil(length / SAMPLE_STEP) + 1))
+        poses = np.array([[s.getX(), s.getY(), s.getYaw()]
+                          for s in (path.getState(i) for i in range(path.getStateCount()))])
+    finally:
+        # break the references between Python objects and OMPL's (no leak at exit)
+        planner.clear()
+        pdef.clearSolutionPaths()
+        del planner, pdef
+    if history and length < history[-1][1]:
+        history.append((time.perf_counter() - t0, length))
+    points = lift(poses, x0, xg, car.wheelbase, radius)
+    return GuidePath(tuple(tuple(float(c) for c in p) for p in points), length,
+                     tuple(history), radius)
+
+
+def lift(poses: np.ndarray, x0: np.ndarray, xg: np.ndarray, wheelbase: float,
+         radius: float) -> list[np.ndarray]:
+    """Waypoints ``(x, y, θ, φ)`` of a Reeds–Shepp path sampled densely (module doc, step 2).
+
+    ``poses (N, 3)``: ``(x, y, yaw)`` along the path (yaw modulo ``2π``), from ``x0``'s pose
+    to ``xg``'s; ``radius``: the path's turning radius.  The first waypoint is ``x0``, the
+    last ``xg`` (their ``φ`` reached by turning the wheels at rest).
+
+    Raises
+    ------
+    PlanningError
+        The unwrapped heading does not end at ``xg``'s ``θ`` (another turn of ``2π``).
+    """
+    d = np.diff(poses[:, :2], axis=0)
+    dyaw = np.angle(np.exp(1j * np.diff(poses[:, 2])))
+    theta = float(x0[2]) + np.concatenate(([0.0], np.cumsum(dyaw)))
+    if abs(theta[-1] - float(xg[2])) > 1e-3:
+        raise PlanningError(
+            f"the Reeds-Shepp path turns the heading by {theta[-1] - x0[2]:.4g}, the goal asks "
+            f"for {xg[2] - x0[2]:.4g} (headings are real numbers, not angles modulo 2 pi)")
+    ds = np.linalg.norm(d, axis=1)
+    along = d[:, 0] * np.cos(theta[:-1]) + d[:, 1] * np.sin(theta[:-1])
+    moving = ds > 1e-9
+    sign = np.where(along >= 0, 1, -1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        turn = np.rint(np.where(moving, dyaw * radius / (sign * ds), 0.0)).clip(-1, 1)
+    phis = np.arctan(wheelbase * turn / radius)
+    pts = np.column_stack([poses[:, 0], poses[:, 1], theta])
+    out = [np.asarray(x0, dtype=float).copy()]
+
+    def add(i: int, phi: float) -> None:
+        q = np.array([*pts[i], phi])
+        if float(np.linalg.norm(q[:3] - out[-1][:3])) <= 1e-9:
+            _turn(out, phi)
+        elif float(np.linalg.norm(q - out[-1])) > 1e-9:
+            out.append(q)
+
+    legs = [i for i in range(len(ds)) if moving[i]]
+    since = 0.0
+    for k, i in enumerate(legs):
+        phi = float(phis[i])
+        if k == 0 or (turn[i], sign[i]) != (turn[legs[k - 1]], sign[legs[k - 1]]):
+            add(i, phi)  # the start of a leg: the wheels turned at rest, if needed
+            since = 0.0
+        since += float(ds[i])
+        last = k == len(legs) - 1 or (turn[legs[k + 1]], sign[legs[k + 1]]) != (turn[i], sign[i])
+        if since >= WAYPOINT_STEP or last:
+            add(i + 1, phi)
+            since = 0.0
+    end = np.asarray(xg, dtype=float)
+    if len(out) > 1:
+        out[-1][:3] = end[:3]  # the sampled end is the goal's pose up to rounding
+    _turn(out, float(end[3]))
+    out[-1] = end.copy()
+    return out
+
+
+def _turn(out: list[np.ndarray], phi: float) -> None:
+    """Append to ``out`` the wheels turning at rest from its last ``φ`` to ``phi``, in steps
+    of at most :data:`PHI_STEP`."""
+    q = out[-1]
+    k = math.ceil(abs(phi - float(q[3])) / PHI_STEP - 1e-9)
+    for j in range(1, k + 1):
+        out.append(np.array([*q[:3], float(q[3]) + (phi - float(q[3])) * j / k]))
