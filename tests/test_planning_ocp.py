@@ -338,6 +338,9 @@ def test_car_with_cheap_steering_and_several_starts_is_near_reeds_shepp() -> Non
     (["--refine", "ocp", "--refine-starts", "33"], "--refine-starts"),
     (["--refine", "ocp", "--reversal-cost", "-1"], "--reversal-cost"),
     (["--refine", "ocp", "--reversal-cost", "1"], "no drive input"),
+    (["--refine", "ocp", "--reversal-cost", "0"], "no drive input"),
+    (["--refine", "ocp", "--input-weights", "1e-7"], "from 1e-06 to 1e+06"),
+    (["--refine", "ocp", "--input-weights", "u1=1e308"], "from 1e-06 to 1e+06"),
 ])
 def test_cli_refinement_options_are_checked_before_any_work(run_cli, args, message) -> None:
     """Each bad value (and each option without ``--refine ocp``, which would be ignored)
@@ -355,6 +358,29 @@ def test_cli_most_refine_starts_is_the_library_s() -> None:
     from nilpotent.planning.ocp import MAX_STARTS
 
     assert MAX_REFINE_STARTS == MAX_STARTS
+    from nilpotent.cli import plan_options
+    from nilpotent.planning import ocp
+
+    assert (plan_options.MIN_WEIGHT, plan_options.MAX_WEIGHT) == (ocp.MIN_WEIGHT, ocp.MAX_WEIGHT)
+
+
+@needs_casadi
+def test_a_common_factor_of_the_weights_changes_nothing() -> None:
+    """Weights ``(c, c)`` for ``c`` = 1e-6, 1, 1e6 give the same refined controls (their
+    unweighted lengths agree to 1e-9) and weighted lengths ``c`` times the unweighted."""
+    from nilpotent.planning.ocp import OcpRefine
+
+    h = get_model("heisenberg")
+    goal = (0.5, 0.3, 0.4)
+    warm = plan(h, (0, 0, 0), goal)
+    lengths = []
+    for c in (1e-6, 1.0, 1e6):
+        segs, info = refine_segments(Checker(h), (0, 0, 0), goal, warm.segments, 1e-8,
+                                     options=OcpRefine(input_weights=(c, c)))
+        assert info.applied, info.reason
+        assert info.length_refined == pytest.approx(c * control_length(segs), rel=1e-9)
+        lengths.append(control_length(segs))
+    assert max(lengths) - min(lengths) <= 1e-9 * max(lengths)
 
 
 @needs_casadi
@@ -371,7 +397,7 @@ def test_cli_input_weights_and_starts_reach_the_refinement(run_cli) -> None:
     data = json.loads(stdout)
     ref = data["refinement"]
     assert ref["applied"] is True, ref
-    assert ref["input_weights"] == [2.0, 2.0] and ref["starts"] == 2
+    assert ref["input_weights"] == [2.0, 2.0] and ref["starts"] == 2 == ref["starts_run"]
     assert ref["candidates"] >= 1 and ref["reversal_cost"] == 0.0
     d = heisenberg_distance(*goal)
     assert 2 * d * (1 - 1e-9) <= ref["length_refined"] <= 2 * d * (1 + DISCRETISATION)
@@ -446,3 +472,19 @@ def test_smooth_car_keeps_its_steering_limit_and_re_times_with_two_stops() -> No
     u = timed.inputs
     assert np.all(np.abs(np.diff(u, axis=0)) / np.diff(timed.times)[:, None]
                   <= np.array([2.0, 4.0]) * 1.05)
+
+
+@needs_casadi
+def test_cli_human_output_compares_the_same_metric(run_cli) -> None:
+    """The printed refinement line names the weighted metric and gives the refined length
+    in it (the JSON's ``length_refined``), not the plan's unweighted length."""
+    args = ("plan", "heisenberg", "--to", "x1=1/2,x2=3/10,x3=2/5", "--refine", "ocp",
+            "--input-weights", "u1=1/10", "--time-limit", "900")
+    status, out, err = run_cli(*args)
+    assert status == 0, err
+    status, js, err = run_cli(*args, "--json")
+    ref = json.loads(js)["refinement"]
+    text = " ".join(out.split())  # the console wraps long lines
+    line = text[text.index("refinement ocp"):text.index("goal reached")]
+    assert "weighted length (weights 0.1, 1)" in line
+    assert f"-> {ref['length_refined']:.6g}" in line and "starts 1 of 1" in line

@@ -157,8 +157,14 @@ def _print_plan(glob) -> None:
         console.print(f"smallest singular margin: {v.min_singular_margin:.4g}")
     ref = glob.refinement
     if ref is not None:
-        console.print(f"refinement ocp: {'applied' if ref.applied else 'not applied'}, length "
-                      f"{ref.length_before:.6g} -> {glob.plan.length:.6g}"
+        metric = "length" if ref.input_weights is None else (
+            f"weighted length (weights {', '.join(f'{w:g}' for w in ref.input_weights)})")
+        after = "none" if ref.length_refined is None else f"{ref.length_refined:.6g}"
+        console.print(f"refinement ocp: {'applied' if ref.applied else 'not applied'}, {metric} "
+                      f"{ref.length_before:.6g} -> {after}; {ref.controls}; starts "
+                      f"{ref.starts_run} of {ref.starts}, {ref.candidates} candidate(s)"
+                      + (f"; cost with reversals {ref.cost_before:.6g} -> {ref.cost_refined:.6g}"
+                         if ref.reversal_cost and ref.cost_refined is not None else "")
                       + (f" ({ref.reason})" if ref.reason else ""))
     if glob.timed is not None:
         timed = glob.timed

@@ -119,6 +119,9 @@ TrajectoryStepOpt = Annotated[
 ]
 
 
+MIN_WEIGHT, MAX_WEIGHT = 1e-6, 1e6
+"""Range of ``--input-weights`` (:data:`nilpotent.planning.ocp.MIN_WEIGHT`, ``MAX_WEIGHT``)."""
+
 MAX_REFINE_STARTS = 32
 """Most ``--refine-starts`` (:data:`nilpotent.planning.ocp.MAX_STARTS`, not imported here:
 the command line starts without CasADi)."""
@@ -169,19 +172,21 @@ def parse_weights_option(text: str, system) -> tuple[float, ...]:
         Malformed text, an unknown or repeated input, a weight not positive and finite.
     """
     from nilpotent.core.model.expressions import parse_expression, real_value
-    from nilpotent.core.model.points import check_magnitude
     from nilpotent.planning.timing import input_names
 
     names = input_names(system.m)
 
     def number(piece: str) -> float:
         if not piece.strip():
-            raise OptionError(f"--input-weights {text!r}: a weight is missing")
-        value = check_magnitude(real_value(parse_expression(piece, {}, where="--input-weights"),
-                                           where="--input-weights"), "--input-weights")
+            raise OptionError(f"--input-weights {text[:60]!r}: a weight is missing")
+        value = float(real_value(parse_expression(piece, {}, where="--input-weights"),
+                                 where="--input-weights"))
         if not (math.isfinite(value) and value > 0):
             raise OptionError(f"--input-weights: a weight must be a positive number, got "
                               f"{value:g}")
+        if not MIN_WEIGHT <= value <= MAX_WEIGHT:
+            raise OptionError(f"--input-weights: a weight must be from {MIN_WEIGHT:g} to "
+                              f"{MAX_WEIGHT:g} (only their ratios matter), got {value:g}")
         return value
 
     if "=" not in text:
@@ -230,7 +235,7 @@ def refine_from_options(refine: str, system, seed: int, input_weights: str | Non
     if refine_starts is not None and not 1 <= refine_starts <= MAX_STARTS:
         raise OptionError(f"--refine-starts must be an integer from 1 to {MAX_STARTS}; got "
                           f"{refine_starts}")
-    if reversal_cost and drive_reversals(system, ()) is None:
+    if reversal_cost is not None and drive_reversals(system, ()) is None:
         raise OptionError(f"--reversal-cost: model {system.name} has no drive input "
                           "(vehicle models only: a unicycle, a car, a car with trailers)")
     weights = None if input_weights is None else parse_weights_option(input_weights, system)

@@ -659,7 +659,8 @@ def _plan_global(
         final = len(targets) == 1
         length = float(np.linalg.norm(w - prev))
         piece_tol = tol if final else max(tol, min(MID_TOL, MID_TOL_FRACTION * length))
-        p = steer_admissible(sys, checker, x, w, piece_tol, options)
+        p = (stage.exact(checker, x, prev, w, piece_tol, CHECK_POINTS)
+             or steer_admissible(sys, checker, x, w, piece_tol, options))
         if p is None or (final and not p.converged):
             off = float(np.linalg.norm(x - prev))
             if length == 0.0:

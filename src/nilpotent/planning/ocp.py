@@ -111,6 +111,10 @@ CORRECTIONS = 8
 #: Samples per segment of the verification (as the global planner's).
 VERIFY_POINTS = 100
 
+#: Range of an input weight (:attr:`OcpRefine.input_weights`): the problem is solved with
+#: the weights divided by the largest, so a common factor changes nothing; their ratios
+#: within 1e12 keep IPOPT's scaling sane.
+MIN_WEIGHT, MAX_WEIGHT = 1e-6, 1e6
 #: Most IPOPT starts of one refinement (:attr:`OcpRefine.starts`).
 MAX_STARTS = 32
 #: Standard deviation of the seeded perturbations of the straight-line state guess (model
@@ -162,10 +166,11 @@ class OcpRefine:
         if not isinstance(self.smooth, bool):
             raise OptionError(f"smooth must be True or False; got {self.smooth!r}")
         if self.input_weights is not None:
-            bad = [w for w in self.input_weights if not (math.isfinite(w) and w > 0)]
+            bad = [w for w in self.input_weights if not MIN_WEIGHT <= w <= MAX_WEIGHT]
             if bad or not self.input_weights:
-                raise OptionError(f"--input-weights must be positive finite numbers, one per "
-                                  f"input; got {list(self.input_weights)[:8]}")
+                raise OptionError(f"--input-weights must be numbers from {MIN_WEIGHT:g} to "
+                                  f"{MAX_WEIGHT:g}, one per input; got "
+                                  f"{list(self.input_weights)[:8]}")
         if not (isinstance(self.starts, int) and 1 <= self.starts <= MAX_STARTS):
             raise OptionError(f"--refine-starts must be an integer from 1 to {MAX_STARTS}; "
                               f"got {self.starts!r}")
@@ -217,7 +222,9 @@ class Refinement:
     input_weights : tuple of float or None
         The weights of the metric of ``length_before``/``length_refined`` (``None``: 1).
     starts : int
-        IPOPT starts tried.
+        IPOPT starts asked for.
+    starts_run : int
+        IPOPT starts run (fewer than ``starts`` when the time limit ran out first).
     candidates : int
         Starts whose controls, re-simulated, reached the goal within ``tol``.
     reversal_cost : float
@@ -247,6 +254,7 @@ class Refinement:
     seconds: float = 0.0
     input_weights: tuple[float, ...] | None = None
     starts: int = 1
+    starts_run: int = 0
     candidates: int = 0
     reversal_cost: float = 0.0
     cost_before: float | None = None
@@ -264,7 +272,8 @@ class Refinement:
             "solver_iterations": self.solver_iterations, "refined_error": self.refined_error,
             "seconds": self.seconds,
             "input_weights": None if self.input_weights is None else list(self.input_weights),
-            "starts": self.starts, "candidates": self.candidates,
+            "starts": self.starts, "starts_run": self.starts_run,
+            "candidates": self.candidates,
             "reversal_cost": self.reversal_cost, "cost_before": self.cost_before,
             "cost_refined": self.cost_refined, "controls": self.controls,
             "smooth_reason": self.smooth_reason,
@@ -510,6 +519,7 @@ def refine_segments(
     t0 = time.perf_counter()
     system = checker.system
     w = opts.weights(system.m)
+    wn = w / float(w.max())  # what IPOPT sees: a common factor of the weights changes nothing
     if opts.reversal_cost > 0 and drive_reversals(system, ()) is None:
         raise OptionError(f"--reversal-cost: model {system.name} has no drive input (vehicle "
                           "models only)")
@@ -544,7 +554,8 @@ def refine_segments(
     for k, (u0, states0) in enumerate(starts):
         try:
             budget.check("refining the plan by optimal control")
-            u, status, its, step = _solve(ca, system, checker, x0, xg, u0, intervals, w,
+            common["starts_run"] = k + 1
+            u, status, its, step = _solve(ca, system, checker, x0, xg, u0, intervals, wn,
                                           states0, share=0.8 / (len(starts) - k),
                                           step=flow)
             solved = {"solver_status": status, "solver_iterations": its}
@@ -576,7 +587,7 @@ def refine_segments(
     for cost, _after, _err, refined, info, u in found:
         variants = [(refined, cost, info)]
         if opts.smooth:  # the cosine series first, the piecewise-constant candidate after
-            variants[:0] = _smoothed(ca, checker, x0, xg, u, w, tol, settings, info,
+            variants[:0] = _smoothed(ca, checker, x0, xg, u, wn, tol, settings, info,
                                      length_of, cost_of)
         for segs, c, inf in variants:
             inf["cost_refined"] = c

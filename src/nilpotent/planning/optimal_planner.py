@@ -349,6 +349,17 @@ class HolonomicStage:
         self.found.append(best)
         return [np.array(p) for p in best.points]
 
+    def exact(self, checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray,
+              tol: float, points: int) -> Any:
+        """The piece from ``x`` to waypoint ``w`` (after ``prev``) driven exactly, or
+        ``None`` (then steered): the lifted Reeds–Shepp guide's legs and turns at rest
+        (:func:`~nilpotent.planning.guide.exact_piece`); ``None`` for the other stages."""
+        if self.planner != "reeds-shepp":
+            return None
+        from nilpotent.planning.guide import exact_piece
+
+        return exact_piece(checker, x, prev, w, tol, points)
+
     def fields(self) -> dict[str, Any]:
         """``planner``, ``path_cost``, ``cost_history`` of the last path (for ``GlobalPlan``):
         the ball–box cost (``"rrtstar"``) or the Reeds–Shepp length (``"reeds-shepp"``)."""
