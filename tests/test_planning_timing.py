@@ -293,3 +293,20 @@ def test_a_plan_that_does_not_move_re_times_to_one_sample_at_rest(run_cli, tmp_p
                    InputBounds((1.0, 1.0), (1.0, 1.0)))
     assert timed.times.tolist() == [0.0] and timed.inputs.tolist() == [[0.0, 0.0]]
     assert timed.states.tolist() == [[0.1, 0.2, 0.3]]
+
+
+def test_a_model_file_borrowing_a_vehicle_name_has_no_drive_input(tmp_path, run_cli):
+    """A model file named ``unicycle`` over the Heisenberg fields is no vehicle: no
+    reversals, and a reversal cost is refused; the built-in with other parameters is."""
+    import sympy as sp
+
+    from nilpotent.models import load_system
+
+    f = tmp_path / "fake.toml"
+    f.write_text('name = "unicycle"\ncoordinates = ["x", "y", "theta"]\n'
+                 '[[fields]]\nx = "1"\ntheta = "-y/2"\n[[fields]]\ny = "1"\ntheta = "x/2"\n')
+    assert drive_reversals(load_system(str(f), {}), ()) is None
+    assert drive_reversals(nil.get_model("car", {"L": sp.Rational(1, 2)}), ()) == 0
+    status, out, _ = run_cli("plan", str(f), "--to", "theta=1/10", "--refine", "ocp",
+                             "--reversal-cost", "1", "--json")
+    assert status == 2 and "no drive input" in json.loads(out)["error"]["message"]

@@ -236,8 +236,9 @@ def refine_from_options(refine: str, system, seed: int, input_weights: str | Non
         raise OptionError(f"--refine-starts must be an integer from 1 to {MAX_STARTS}; got "
                           f"{refine_starts}")
     if reversal_cost is not None and drive_reversals(system, ()) is None:
-        raise OptionError(f"--reversal-cost: model {system.name} has no drive input "
-                          "(vehicle models only: a unicycle, a car, a car with trailers)")
+        raise OptionError(f"--reversal-cost: model {system.name} has no drive input (only "
+                          "the built-in vehicle models unicycle, car, car-trailers:K, or a "
+                          "model file with their fields, have one)")
     weights = None if input_weights is None else parse_weights_option(input_weights, system)
     return OcpRefine(input_weights=weights, starts=refine_starts or 1,
                      reversal_cost=reversal_cost or 0.0, seed=seed, smooth=smooth)
