@@ -28,12 +28,13 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from types import MappingProxyType
+from typing import Any
 
 import sympy as sp
 
 from nilpotent.core.model.expressions import format_expression
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.errors import ModelError
+from nilpotent.errors import ModelError, NilpotentError
 from nilpotent.models.classic import cartan, engel, heisenberg, martinet, unicycle
 from nilpotent.models.groups import rigid_body, roto_translation
 from nilpotent.models.outlines import with_builtin_constraints
@@ -65,6 +66,7 @@ __all__ = [
     "TridentGeometry",
     "WheelSlip",
     "get_model",
+    "is_builtin",
     "joint_singularity",
     "list_models",
     "load_system",
@@ -376,3 +378,23 @@ def load_system(spec: str, params: Mapping[str, object] | None = None) -> Contro
     if params:
         system = system.with_parameters(dict(params))
     return system
+
+
+_BUILTIN_CHECKS: dict[tuple[Any, ...], bool] = {}
+
+
+def is_builtin(system: ControlSystem) -> bool:
+    """Whether ``system`` has the coordinates and fields of the built-in model of its name
+    and parameters (structural equality of the sympy fields; cached): a model file that
+    only borrows a built-in's name (``name = "unicycle"`` over other fields) is not."""
+    key = (system.name, system.coordinate_names, tuple(system.parameters),
+           tuple(tuple(f) for f in system.fields))
+    if key not in _BUILTIN_CHECKS:
+        try:
+            ref = get_model(system.name, dict(system.parameters))
+            same = (ref.coordinate_names == system.coordinate_names
+                    and tuple(tuple(f) for f in ref.fields) == key[3])
+        except NilpotentError:  # a name or parameters the built-ins refuse: not one
+            same = False
+        _BUILTIN_CHECKS[key] = same
+    return _BUILTIN_CHECKS[key]

@@ -47,13 +47,12 @@ import sympy as sp
 
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PlanningError
-from nilpotent.planning import budget
-from nilpotent.planning.holonomic_path import SIMPLIFY_SECONDS, box
+from nilpotent.planning.holonomic_path import SIMPLIFY_SECONDS, anytime_solve, box
 from nilpotent.planning.verify import Checker
 
 __all__ = [
     "CAR_COORDINATES", "RADIUS_FACTOR", "CarGeometry", "GuidePath", "car_geometry",
-    "guide_path", "lift",
+    "exact_piece", "guide_path", "lift",
 ]
 
 #: Coordinates of a car-like model, in order.
@@ -73,8 +72,6 @@ PHI_STEP = 0.1
 #: (the steering needs the rest of a generous limit more than RRT* does).
 IMPROVE_FRACTION = 0.5
 IMPROVE_SECONDS = 3.0
-#: Length of one RRT* slice (seconds) between two records of the best length.
-SLICE_SECONDS = 0.25
 #: Largest step (length units) at which OMPL checks the poses along a motion.
 CHECK_STEP = 0.02
 
@@ -237,28 +234,10 @@ def guide_path(
     planner.setProblemDefinition(pdef)
     planner.setup()
     t0 = time.perf_counter()
-    history: list[tuple[float, float]] = []
-    first: float | None = None
     improve = min(IMPROVE_FRACTION * seconds, IMPROVE_SECONDS)
     try:
-        while True:
-            spent = time.perf_counter() - t0
-            left = seconds - spent
-            if first is not None:
-                left = min(left, first + improve - spent)
-            if left <= 0:
-                break
-            budget.check("looking for a Reeds-Shepp path with OMPL RRT*")
-            planner.solve(float(min(SLICE_SECONDS, left)))
-            if pdef.hasExactSolution():
-                now = time.perf_counter() - t0
-                first = now if first is None else first
-                history.append((now, float(planner.bestCost().value())))
-        if first is None:
-            raise PlanningError(
-                f"no collision-free Reeds-Shepp path (radius {radius:.3g}) from OMPL RRT* "
-                f"within {seconds:.3g} s; raise --time-limit, or check that start and goal are "
-                "connected in the free space")
+        history = anytime_solve(planner, pdef, seconds, improve,
+                                f"a Reeds-Shepp path (radius {radius:.3g})")
         path: Any = og.PathGeometric(pdef.getSolutionPath())
         og.PathSimplifier(si).simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))
         length = float(path.length())

@@ -6,6 +6,7 @@ by the planner's validity check), before it is cut into pieces and steered
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -13,12 +14,16 @@ from typing import Any
 import numpy as np
 
 from nilpotent.errors import PlanningError
+from nilpotent.planning import budget
 from nilpotent.planning.verify import Checker
 
-__all__ = ["SIMPLIFY_SECONDS", "ConfigurationSpace", "box", "configuration_space", "ompl_path"]
+__all__ = ["SIMPLIFY_SECONDS", "SLICE_SECONDS", "ConfigurationSpace", "anytime_solve", "box",
+           "configuration_space", "ompl_path"]
 
 #: Longest time OMPL's path simplification (shortcutting) may take.
 SIMPLIFY_SECONDS = 0.5
+#: Length of one RRT* slice between two records of the best cost (seconds).
+SLICE_SECONDS = 0.25
 
 
 def box(
@@ -170,3 +175,38 @@ def ompl_path(
     pts = [cs.embed(st) for st in states]
     pts[0], pts[-1] = x0.copy(), xg.copy()
     return pts
+
+
+def anytime_solve(planner: Any, pdef: Any, seconds: float, improve: float,
+                  what: str) -> list[tuple[float, float]]:
+    """Run an OMPL optimising planner in slices of :data:`SLICE_SECONDS` until ``seconds``,
+    or ``improve`` seconds after its first exact solution; ``[(seconds, best cost)]`` after
+    each slice with a solution (the budget is checked before each slice).
+
+    Raises
+    ------
+    PlanningError
+        No exact solution within ``seconds`` (``what`` names the path sought).
+    """
+    t0 = time.perf_counter()
+    history: list[tuple[float, float]] = []
+    first: float | None = None
+    while True:
+        spent = time.perf_counter() - t0
+        left = seconds - spent
+        if first is not None:
+            left = min(left, first + improve - spent)
+        if left <= 0:
+            break
+        budget.check(f"looking for {what} with OMPL RRT*")
+        planner.solve(float(min(SLICE_SECONDS, left)))
+        if pdef.hasExactSolution():
+            now = time.perf_counter() - t0
+            first = now if first is None else first
+            history.append((now, float(planner.bestCost().value())))
+    if first is None:
+        raise PlanningError(
+            f"no collision-free {what.removeprefix('a ')} from OMPL RRT* within {seconds:.3g} "
+            "s; raise --time-limit, or check that start and goal are connected in the free "
+            "space")
+    return history

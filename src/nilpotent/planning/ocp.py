@@ -82,8 +82,8 @@ from nilpotent.planning.casadi_tree import casadi_module
 from nilpotent.planning.casadi_tree import to_casadi as to_casadi
 from nilpotent.planning.controls import Segment, constant_segment
 from nilpotent.planning.geodesic import control_length
-from nilpotent.planning.ocp_smooth import limit_constraints, smooth_controls
-from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_candidates
+from nilpotent.planning.ocp_smooth import correct_endpoint, limit_constraints, smooth_controls
+from nilpotent.planning.simulation import PLANNING_SETTINGS
 from nilpotent.planning.timing import drive_reversals
 from nilpotent.planning.verify import Checker, Verification, verify_segments
 from nilpotent.strict_json import json_object
@@ -442,24 +442,8 @@ def _correct(
     end = step.mapaccum(n_int)(ca.DM(x0), us)[0][:, -1]
     jac = ca.Function("endpoint_jacobian", [us], [ca.jacobian(end, ca.vec(us))])
 
-    def error_of(v: np.ndarray) -> tuple[np.ndarray, float]:
-        reached = simulate_candidates(system, x0, [_segments(v)], settings)[0]
-        err = float(np.linalg.norm(reached - xg))
-        return reached, err if math.isfinite(err) else math.inf
-
-    reached, err = error_of(u)
-    for _ in range(CORRECTIONS):
-        if err <= tol / 10:
-            break
-        budget.check("correcting the endpoint of the refined controls")
-        j = np.array(jac(u), dtype=float)
-        delta, *_ = np.linalg.lstsq(j, reached - xg, rcond=None)
-        trial = u - delta.reshape(n_int, m).T  # vec(u) is column-major
-        r_trial, e_trial = error_of(trial)
-        if not e_trial < err:
-            break
-        u, reached, err = trial, r_trial, e_trial
-    return u, err
+    return correct_endpoint(system, x0, xg, u, jac, _segments, tol, settings, CORRECTIONS,
+                            "correcting the endpoint of the refined controls")
 
 
 def refine_segments(

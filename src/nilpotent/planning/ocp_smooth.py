@@ -38,7 +38,8 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.simulation import simulate_candidates
 from nilpotent.planning.verify import Checker
 
-__all__ = ["HARMONICS", "cosine_segment", "limit_constraints", "project", "smooth_controls"]
+__all__ = ["HARMONICS", "correct_endpoint", "cosine_segment", "limit_constraints", "project",
+           "smooth_controls"]
 
 #: Harmonics ``K`` of the cosine series of each input.
 HARMONICS = 16
@@ -72,6 +73,36 @@ def limit_constraints(ca: Any, opti: Any, system: ControlSystem, checker: Checke
         for r, (_, _, lo, hi) in enumerate(limits.relative):
             pad_lo, pad_hi = pads(lo, hi, at_ends[r])
             opti.subject_to(opti.bounded(lo + pad_lo, values[r, :], hi - pad_hi))
+
+
+def correct_endpoint(system: ControlSystem, x0: np.ndarray, xg: np.ndarray,
+                     params: np.ndarray, jac: Any, to_segments: Any, tol: float,
+                     settings: IntegrationSettings, corrections: int,
+                     what: str) -> tuple[np.ndarray, float]:
+    """Gauss–Newton on the endpoint of the controls ``to_segments(params)``: the residual
+    is the product's re-simulation (adaptive, the planning settings), the Jacobian
+    ``jac(params)`` that of a model of it (the RK4 roll-out) with respect to
+    ``vec(params)`` (column-major); at most ``corrections`` steps, each kept only if it
+    reduces the error, until the error is ``tol / 10``.  Returns ``(params, error)``."""
+    def error_of(c: np.ndarray) -> tuple[np.ndarray, float]:
+        reached = simulate_candidates(system, x0, [to_segments(c)], settings)[0]
+        err = float(np.linalg.norm(reached - xg))
+        return reached, err if math.isfinite(err) else math.inf
+
+    reached, err = error_of(params)
+    rows, cols = params.shape
+    for _ in range(corrections):
+        if err <= tol / 10:
+            break
+        budget.check(what)
+        j = np.array(jac(params), dtype=float)
+        delta, *_ = np.linalg.lstsq(j, reached - xg, rcond=None)
+        trial = params - delta.reshape(cols, rows).T  # vec() is column-major
+        r_trial, e_trial = error_of(trial)
+        if not e_trial < err:
+            break
+        params, reached, err = trial, r_trial, e_trial
+    return params, err
 
 
 def project(u: np.ndarray, harmonics: int = HARMONICS) -> np.ndarray:
@@ -176,22 +207,7 @@ def smooth_controls(
     sym = ca.SX.sym("c", m, harmonics + 1)
     end = step.mapaccum(n_int)(ca.DM(x0), sym, ca.DM(times).T)[0][:, -1]
     jac = ca.Function("cosine_endpoint_jacobian", [sym], [ca.jacobian(end, ca.vec(sym))])
-
-    def error_of(c: np.ndarray) -> tuple[np.ndarray, float]:
-        reached = simulate_candidates(system, x0, [[cosine_segment(c)]], settings)[0]
-        err = float(np.linalg.norm(reached - xg))
-        return reached, err if math.isfinite(err) else math.inf
-
-    reached, err = error_of(coeffs)
-    for _ in range(corrections):
-        if err <= tol / 10:
-            break
-        budget.check("correcting the endpoint of the smooth refined controls")
-        j = np.array(jac(coeffs), dtype=float)
-        delta, *_ = np.linalg.lstsq(j, reached - xg, rcond=None)
-        trial = coeffs - delta.reshape(harmonics + 1, m).T  # vec() is column-major
-        r_trial, e_trial = error_of(trial)
-        if not e_trial < err:
-            break
-        coeffs, reached, err = trial, r_trial, e_trial
+    coeffs, err = correct_endpoint(
+        system, x0, xg, coeffs, jac, lambda c: [cosine_segment(c)], tol, settings, corrections,
+        "correcting the endpoint of the smooth refined controls")
     return cosine_segment(coeffs), err, ""

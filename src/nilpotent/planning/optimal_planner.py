@@ -55,7 +55,7 @@ import sympy as sp
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PlanningError
 from nilpotent.planning import budget
-from nilpotent.planning.holonomic_path import configuration_space, ompl_path
+from nilpotent.planning.holonomic_path import anytime_solve, configuration_space, ompl_path
 from nilpotent.planning.verify import Checker
 
 __all__ = [
@@ -72,8 +72,6 @@ IMPROVE_FRACTION = 0.5
 BOX_CONSTANT = 2.0 * math.sqrt(math.pi)
 #: Cost of a motion through a point where the frame is singular (not infinite: OMPL adds it).
 SINGULAR_COST = 1e9
-#: Length of one RRT* slice between two records of the best cost (seconds).
-SLICE_SECONDS = 0.25
 
 
 @dataclass(frozen=True, eq=False)
@@ -238,27 +236,9 @@ def optimal_path(
     planner.setProblemDefinition(pdef)
     planner.setup()
     t0 = time.perf_counter()
-    history: list[tuple[float, float]] = []
-    first: float | None = None
     improve = seconds if improve_seconds is None else improve_seconds
     try:
-        while True:
-            spent = time.perf_counter() - t0
-            left = seconds - spent
-            if first is not None:
-                left = min(left, first + improve - spent)
-            if left <= 0:
-                break
-            budget.check("looking for a path with OMPL RRT*")
-            planner.solve(float(min(SLICE_SECONDS, left)))
-            if pdef.hasExactSolution():
-                now = time.perf_counter() - t0
-                first = now if first is None else first
-                history.append((now, float(planner.bestCost().value())))
-        if first is None:
-            raise PlanningError(
-                f"no collision-free path from OMPL RRT* within {seconds:.3g} s; raise "
-                "--time-limit, or check that start and goal are connected in the free space")
+        history = anytime_solve(planner, pdef, seconds, improve, "a path")
         path: Any = pdef.getSolutionPath()  # a geometric path (the stubs say Path)
         pts = [embed(path.getState(i)) for i in range(path.getStateCount())]
     finally:

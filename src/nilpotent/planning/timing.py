@@ -49,13 +49,8 @@ from typing import Any
 import numpy as np
 
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.errors import (
-    ComputationLimitError,
-    IntegrationError,
-    NilpotentError,
-    OptionError,
-    PlanningError,
-)
+from nilpotent.errors import ComputationLimitError, IntegrationError, OptionError, PlanningError
+from nilpotent.models import is_builtin
 from nilpotent.numeric.settings import IntegrationSettings
 from nilpotent.numeric.signals import InputSignal, Segment, Signal
 from nilpotent.numeric.types import State
@@ -664,30 +659,9 @@ def drive_reversals(system: ControlSystem, segments: Sequence[Segment]) -> int |
     parameters), or a model file with its fields: a file that only borrows the name
     (``name = "unicycle"`` over other fields) has no drive input."""
     index = DRIVE_INPUTS.get(system.name.partition(":")[0])
-    if index is None or index >= system.m or not _is_builtin_vehicle(system):
+    if index is None or index >= system.m or not is_builtin(system):
         return None
     return input_reversals(segments)[index] if segments else 0
-
-
-_VEHICLE_CHECKS: dict[tuple[Any, ...], bool] = {}
-
-
-def _is_builtin_vehicle(system: ControlSystem) -> bool:
-    """Whether ``system`` has the coordinates and fields of the built-in model of its name
-    and parameters (structural equality of the sympy fields; cached)."""
-    from nilpotent.models import get_model
-
-    key = (system.name, system.coordinate_names, tuple(system.parameters),
-           tuple(tuple(f) for f in system.fields))
-    if key not in _VEHICLE_CHECKS:
-        try:
-            ref = get_model(system.name, dict(system.parameters))
-            same = (ref.coordinate_names == system.coordinate_names
-                    and tuple(tuple(f) for f in ref.fields) == key[3])
-        except NilpotentError:  # a name or parameters the built-in refuses: not it
-            same = False
-        _VEHICLE_CHECKS[key] = same
-    return _VEHICLE_CHECKS[key]
 
 
 def motion_fields(system: ControlSystem, segments: Sequence[Segment],
