@@ -7,12 +7,15 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from nilpotent.cli.app import MAX_SEED, bounded_float, bounded_int
 from nilpotent.errors import OptionError
+
+if TYPE_CHECKING:
+    from nilpotent.planning.ocp import OcpRefine
 
 MIN_MAX_PIECE = 1e-3
 """Shortest ``--max-piece``: the global path is cut into ``length / D`` pieces, each
@@ -321,7 +324,8 @@ def command_budget(time_limit: float):
 
 def plan_from_options(system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
                       max_piece, *, anchor="auto", max_iterations=30, clearance=0.0,
-                      objective="reach", refine="none", max_speed=None, max_accel=None,
+                      objective="reach", refine: str | OcpRefine = "none", max_speed=None,
+                      max_accel=None,
                       trajectory_step=None, planner="rrtconnect"):
     """Load the world, merge the limits and run the global planner (shared with ``execute``)."""
     from nilpotent.planning.global_planner import plan_global

@@ -60,7 +60,7 @@ from nilpotent.planning.controls import Segment
 from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
-from nilpotent.planning.ocp import Refinement, check_refine, refine_route
+from nilpotent.planning.ocp import OcpRefine, Refinement, check_refine, refine_route
 from nilpotent.planning.optimal_planner import HolonomicStage, planner_json
 from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.timing import TimedTrajectory, input_bounds, motion_fields, retime
@@ -401,7 +401,7 @@ def plan_global(
     path_clearance: float = PATH_CLEARANCE,
     hold_shape: bool = True,
     objective: str = "reach",
-    refine: str = "none",
+    refine: str | OcpRefine = "none",
     max_speed: float | Sequence[float] | dict[str, float] | None = None,
     max_accel: float | Sequence[float] | dict[str, float] | None = None,
     trajectory_step: float | None = None,
@@ -463,13 +463,12 @@ def plan_global(
         final verification (default
         :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`: adaptive DOP853 at
         ``rtol = 1e-12``; its ``max_steps`` counts per segment of the controls).
-    refine : str
-        ``"none"`` (default) or ``"ocp"``: the plan found is refined by direct optimal
-        control of the true system, minimising its length under the limits
-        (:func:`nilpotent.planning.ocp.refine_segments`; needs the ``ocp`` extra; the
-        obstacles are not constraints of that problem), and the refined controls are
-        kept only if they verify and are shorter (:attr:`GlobalPlan.refinement` says
-        what happened).
+    refine : str or OcpRefine
+        ``"none"`` (default), ``"ocp"``, or :class:`~nilpotent.planning.ocp.OcpRefine`
+        options: the plan found is refined by direct optimal control of the true system
+        (:func:`nilpotent.planning.ocp.refine_segments`; the ``ocp`` extra; obstacles are not
+        constraints of that problem), kept only if it verifies and is shorter
+        (:attr:`GlobalPlan.refinement` says what happened).
     max_speed, max_accel : float, sequence of float, dict or None
         Bounds on the inputs of the re-timed motion, ``|ũ_i| ≤ V_i`` and
         ``|dũ_i/dt| ≤ A_i``: a number (every input), ``m`` numbers, or
@@ -540,7 +539,7 @@ def _plan_global(
     path_clearance: float,
     hold_shape: bool,
     objective: str,
-    refine: str,
+    refine: str | OcpRefine,
     planner: str = "rrtconnect",
 ) -> GlobalPlan:
     t0 = time.perf_counter()

@@ -218,7 +218,8 @@ def guide_path(
     step = min(resolution, CHECK_STEP)
     si.setStateValidityCheckingResolution(step / max(space.getMaximumExtent(), 1e-12))
     si.setup()
-    start, goal = space.allocState(), space.allocState()
+    start: Any = space.allocState()  # SE(2) states (the stubs say State)
+    goal: Any = space.allocState()
     for st, q in ((start, x0), (goal, xg)):
         st.setX(float(q[0]))
         st.setY(float(q[1]))
@@ -238,7 +239,8 @@ def guide_path(
     try:
         history = anytime_solve(planner, pdef, seconds, improve,
                                 f"a Reeds-Shepp path (radius {radius:.3g})")
-        path: Any = og.PathGeometric(pdef.getSolutionPath())
+        solution: Any = pdef.getSolutionPath()  # a geometric path (the stubs say Path)
+        path: Any = og.PathGeometric(solution)
         og.PathSimplifier(si).simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))
         length = float(path.length())
         path.interpolate(max(2, math.ceil(length / SAMPLE_STEP) + 1))

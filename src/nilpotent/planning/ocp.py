@@ -531,7 +531,7 @@ def refine_segments(
     budget.check("refining the plan by optimal control")
     starts = [(_warm_controls(segments, intervals, system.m), None),
               *_guesses(checker, x0, xg, intervals, opts)]
-    found: list[tuple[float, float, float, list[Segment], dict[str, Any]]] = []
+    found: list[tuple[float, float, float, list[Segment], dict[str, Any], np.ndarray]] = []
     reasons: list[str] = []
     solved: dict[str, Any] = {}
     flow = _problem(ca, system, intervals)  # the CasADi graph once, for every start
