@@ -134,7 +134,7 @@ def _not_car_like(system: ControlSystem) -> str:
         return f"has {system.m} fields, not 2"
     _, _, theta, phi = system.coordinates
     drive, steer = system.specialized_fields
-    if tuple(sp.sympify(c) for c in steer) != (0, 0, 0, 1):
+    if tuple(steer) != (0, 0, 0, 1):  # sympy numbers compare equal to ints
         return "has a second field other than d/dphi"
     ratio = sp.simplify(sp.tan(phi) / drive[2]) if drive[2] != 0 else sp.nan
     if (sp.simplify(drive[0] - sp.cos(theta)) != 0 or sp.simplify(drive[1] - sp.sin(theta)) != 0
@@ -329,7 +329,7 @@ AT_REST = 1e-9
 
 
 def exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray,
-                tol: float, points: int) -> Any:
+                tol: float, points: int, wheelbase: float) -> Any:
     """The car's exact motion between two consecutive lifted waypoints, if it lands within
     ``tol`` of ``w`` and is admissible; else ``None`` (the piece is then steered).
 
@@ -339,7 +339,8 @@ def exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray
     ``κ = tan φ / L``, the displacement along the heading on a straight leg), from the
     state ``x`` reached so far.  These are the Reeds–Shepp path's own motions, so no
     steering manoeuvre is added (steering a straight piece of 0.26 drove 0.41 with 5
-    reversals).  Returns a :class:`~nilpotent.planning.iterative.Plan` of the piece.
+    reversals).  ``wheelbase``: ``L`` of the car-like model (:func:`car_geometry`, computed
+    once per plan).  Returns a :class:`~nilpotent.planning.iterative.Plan` of the piece.
     """
     from nilpotent.errors import IntegrationError
     from nilpotent.planning.controls import constant_segment
@@ -348,15 +349,10 @@ def exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray
     from nilpotent.simulation.trajectory import Trajectory
 
     system = checker.system
-    if _not_car_like(system):
-        return None
     d = w - prev
     if float(np.abs(d[:3]).max()) <= AT_REST:
         u = (0.0, float(w[3] - x[3]))
     elif abs(float(d[3])) <= AT_REST:
-        wheelbase = float(sp.simplify(sp.tan(system.coordinates[3])
-                                      / system.specialized_fields[0][2]).subs(
-                                          system.coordinates[2], 0))
         kappa = math.tan(float(prev[3])) / wheelbase
         if abs(kappa) > 1e-12:
             s = float(d[2]) / kappa

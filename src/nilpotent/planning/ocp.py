@@ -82,7 +82,12 @@ from nilpotent.planning.casadi_tree import casadi_module
 from nilpotent.planning.casadi_tree import to_casadi as to_casadi
 from nilpotent.planning.controls import Segment, constant_segment
 from nilpotent.planning.geodesic import control_length
-from nilpotent.planning.ocp_smooth import correct_endpoint, limit_constraints, smooth_controls
+from nilpotent.planning.ocp_smooth import (
+    correct_endpoint,
+    limit_constraints,
+    rk4_interval,
+    smooth_controls,
+)
 from nilpotent.planning.simulation import PLANNING_SETTINGS
 from nilpotent.planning.timing import drive_reversals
 from nilpotent.planning.verify import Checker, Verification, verify_segments
@@ -333,23 +338,10 @@ def _segments(u: np.ndarray) -> list[Segment]:
 
 def _problem(ca: Any, system: ControlSystem, n_int: int) -> Any:
     """One interval's RK4 flow ``(x, u) ↦ (x⁺, sub-step states)`` (a CasADi Function)."""
-    n, m = system.n, system.m
-    x = ca.SX.sym("x", n)
-    u = ca.SX.sym("u", m)
-    symbols = {c: x[i] for i, c in enumerate(system.coordinates)}
-    cols = [ca.vertcat(*[to_casadi(e, symbols) for e in field])
-            for field in system.specialized_fields]
-    f = ca.Function("f", [x, u], [sum((cols[i] * u[i] for i in range(1, m)), cols[0] * u[0])])
-    h = 1.0 / (n_int * SUBSTEPS)
-    z = x
-    subs = []
-    for _ in range(SUBSTEPS):
-        k1 = f(z, u)
-        k2 = f(z + h / 2 * k1, u)
-        k3 = f(z + h / 2 * k2, u)
-        k4 = f(z + h * k3, u)
-        z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        subs.append(z)
+    x = ca.SX.sym("x", system.n)
+    u = ca.SX.sym("u", system.m)
+    z, subs = rk4_interval(ca, system, x, lambda t: u, 0.0, 1.0 / (n_int * SUBSTEPS),
+                           SUBSTEPS)
     return ca.Function("step", [x, u], [z, ca.horzcat(*subs)])
 
 

@@ -39,7 +39,7 @@ from nilpotent.planning.simulation import simulate_candidates
 from nilpotent.planning.verify import Checker
 
 __all__ = ["HARMONICS", "correct_endpoint", "cosine_segment", "limit_constraints", "project",
-           "smooth_controls"]
+           "rk4_interval", "smooth_controls"]
 
 #: Harmonics ``K`` of the cosine series of each input.
 HARMONICS = 16
@@ -126,24 +126,17 @@ def cosine_segment(coeffs: np.ndarray) -> Segment:
                                        for c in coeffs))
 
 
-def _cosine_flow(ca: Any, system: ControlSystem, n_int: int, harmonics: int,
-                 substeps: int) -> Any:
-    """One interval's RK4 flow ``(x, C, t0) ↦ (x⁺, sub-step states)`` with the inputs
-    ``C · (1, cos πt, …, cos Kπt)`` evaluated at each stage's time."""
+def rk4_interval(ca: Any, system: ControlSystem, x: Any, inputs: Any, t0: Any, h: float,
+                 substeps: int) -> tuple[Any, list[Any]]:
+    """``substeps`` classical RK4 steps of ``h`` of ``ẋ = Σ u_i X_i(x)`` from the CasADi
+    state ``x`` at time ``t0``, the inputs ``inputs(t)`` evaluated at each stage's time
+    (constant inputs: a function that ignores ``t``); ``(end state, sub-step states)``."""
     n, m = system.n, system.m
-    x = ca.SX.sym("x", n)
-    c = ca.SX.sym("c", m, harmonics + 1)
-    t0 = ca.SX.sym("t0")
     xf, v = ca.SX.sym("xf", n), ca.SX.sym("v", m)
     symbols = {s: xf[i] for i, s in enumerate(system.coordinates)}
     cols = [ca.vertcat(*[to_casadi(e, symbols) for e in fld])
             for fld in system.specialized_fields]
     f = ca.Function("f", [xf, v], [sum((cols[i] * v[i] for i in range(1, m)), cols[0] * v[0])])
-
-    def inputs(t: Any) -> Any:
-        return c @ ca.vertcat(1, *[ca.cos(k * math.pi * t) for k in range(1, harmonics + 1)])
-
-    h = 1.0 / (n_int * substeps)
     z, subs = x, []
     for j in range(substeps):
         t = t0 + j * h
@@ -154,6 +147,21 @@ def _cosine_flow(ca: Any, system: ControlSystem, n_int: int, harmonics: int,
         k4 = f(z + h * k3, u1)
         z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         subs.append(z)
+    return z, subs
+
+
+def _cosine_flow(ca: Any, system: ControlSystem, n_int: int, harmonics: int,
+                 substeps: int) -> Any:
+    """One interval's RK4 flow ``(x, C, t0) ↦ (x⁺, sub-step states)`` with the inputs
+    ``C · (1, cos πt, …, cos Kπt)`` evaluated at each stage's time."""
+    x = ca.SX.sym("x", system.n)
+    c = ca.SX.sym("c", system.m, harmonics + 1)
+    t0 = ca.SX.sym("t0")
+
+    def inputs(t: Any) -> Any:
+        return c @ ca.vertcat(1, *[ca.cos(k * math.pi * t) for k in range(1, harmonics + 1)])
+
+    z, subs = rk4_interval(ca, system, x, inputs, t0, 1.0 / (n_int * substeps), substeps)
     return ca.Function("cosine_step", [x, c, t0], [z, ca.horzcat(*subs)])
 
 

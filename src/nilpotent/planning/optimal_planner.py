@@ -306,10 +306,11 @@ class HolonomicStage:
     def __init__(self, planner: str, piece: float, checker: Checker | None = None) -> None:
         if planner not in PLANNERS:
             raise OptionError(f"unknown planner {planner!r} (choose from {', '.join(PLANNERS)})")
+        self.car: Any = None  # the guide's CarGeometry, once (refuses a model not car-like)
         if planner == "reeds-shepp" and checker is not None:
             from nilpotent.planning.guide import car_geometry
 
-            car_geometry(checker.system, checker)
+            self.car = car_geometry(checker.system, checker)
         self.planner, self.piece = planner, piece
         self.found: list[Any] = []
 
@@ -334,11 +335,11 @@ class HolonomicStage:
         """The piece from ``x`` to waypoint ``w`` (after ``prev``) driven exactly, or
         ``None`` (then steered): the lifted Reeds–Shepp guide's legs and turns at rest
         (:func:`~nilpotent.planning.guide.exact_piece`); ``None`` for the other stages."""
-        if self.planner != "reeds-shepp":
+        if self.car is None:
             return None
         from nilpotent.planning.guide import exact_piece
 
-        return exact_piece(checker, x, prev, w, tol, points)
+        return exact_piece(checker, x, prev, w, tol, points, self.car.wheelbase)
 
     def fields(self) -> dict[str, Any]:
         """``planner``, ``path_cost``, ``cost_history`` of the last path (for ``GlobalPlan``):
