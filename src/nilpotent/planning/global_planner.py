@@ -621,7 +621,7 @@ def _plan_global(
     else:
         t_ompl = time.perf_counter()
         path = None
-        held = shape_indices(checker) if hold_shape else ()
+        held = shape_indices(checker) if hold_shape and stage.car is None else ()
         if held:
             # first with the shape held (body pose only), then in the whole space
             budget.check("looking for a path with OMPL")
@@ -633,7 +633,7 @@ def _plan_global(
                 path = None
         if path is None:
             budget.check("looking for a path with OMPL")
-            seconds = max(0.1, 0.5 * budget.seconds_left())
+            seconds = max(0.1, stage.share * budget.seconds_left())
             path = stage.path(checker, x0, xg, seconds, seed, valid=path_valid)
         planner_s = time.perf_counter() - t_ompl
     pieces_needed = sum(math.ceil(float(np.linalg.norm(b - a)) / max_piece)

@@ -36,6 +36,7 @@ radius is ``L / tan φ_max`` (the smaller side of an asymmetric limit).
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -51,27 +52,35 @@ from nilpotent.planning.holonomic_path import SIMPLIFY_SECONDS, anytime_solve, b
 from nilpotent.planning.verify import Checker
 
 __all__ = [
-    "CAR_COORDINATES", "RADIUS_FACTOR", "CarGeometry", "GuidePath", "car_geometry",
+    "CAR_COORDINATES", "PHI_MARGIN", "CarGeometry", "GuidePath", "car_geometry",
     "exact_piece", "guide_path", "lift",
 ]
 
 #: Coordinates of a car-like model, in order.
 CAR_COORDINATES = ("x", "y", "theta", "phi")
-#: Turning radius of the guide, as a multiple of the car's least one: room for the steered
-#: motion's overshoot of ``φ`` (1.05, ``φ_g`` 0.021 below the default limit, failed 3 of 4
-#: benchmark pairs at the limit; 1.2, 0.077 below, none).
-RADIUS_FACTOR = 1.2
+#: The guide's steering angle ``φ_g`` is this far (rad) below the limit: its turning radius
+#: is ``L / tan φ_g`` (0.56 % above the least one for the built-in car).  The legs are driven
+#: exactly, so this is only room for the motion check's cover between samples of a turn of
+#: the wheels at rest that ends at ``±φ_g`` (:func:`exact_piece`).  (When every piece was
+#: steered, 1.2 × the least radius was needed: the steering overshot ``φ``.)
+PHI_MARGIN = 2.5e-3
 #: Arc length between the samples of the Reeds–Shepp path that are classified.
 SAMPLE_STEP = 0.01
+#: Arc length between the samples of one Reeds–Shepp curve whose legs are solved
+#: (:func:`edge_legs`), the Gauss–Newton steps on their lengths, and the pose error left.
+LEG_SAMPLE_STEP = 0.002
+LEG_ITERATIONS = 20
+LEG_TOL = 1e-11
 #: Largest arc length between two waypoints of one leg.
 WAYPOINT_STEP = 0.25
 #: Largest change of ``φ`` between two waypoints where the wheels turn at rest (the
 #: tolerance at a waypoint is a tenth of the piece: small turns leave the car on the path).
 PHI_STEP = 0.1
 #: Share of its time RRT* spends improving its first path, at most :data:`IMPROVE_SECONDS`
-#: (the steering needs the rest of a generous limit more than RRT* does).
+#: (the car-parking pairs of benchmarks/plan_world.py: 1.66–1.70 × Reeds–Shepp RRT* of a
+#: 30 s budget after 3 s of improvement, within 1.1 × after 7–17 s).
 IMPROVE_FRACTION = 0.5
-IMPROVE_SECONDS = 3.0
+IMPROVE_SECONDS = 15.0
 #: Largest step (length units) at which OMPL checks the poses along a motion.
 CHECK_STEP = 0.02
 
@@ -193,8 +202,8 @@ def guide_path(
     from ompl import util as ou
 
     car = car_geometry(checker.system, checker)
-    radius = RADIUS_FACTOR * car.min_radius
-    phi_g = math.atan(car.wheelbase / radius)
+    phi_g = car.phi_max - PHI_MARGIN
+    radius = car.wheelbase / math.tan(phi_g)
     is_valid = checker.valid if valid is None else valid
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     if seed is not None:
@@ -243,6 +252,12 @@ def guide_path(
         path: Any = og.PathGeometric(solution)
         og.PathSimplifier(si).simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))
         length = float(path.length())
+        vertices = [path.getState(i) for i in range(path.getStateCount())]
+        try:
+            legs = [leg for a, b in itertools.pairwise(vertices)
+                    for leg in edge_legs(_edge_poses(space, a, b), radius)]
+        except PlanningError:
+            legs = None  # a curve not solved: its dense samples lifted instead
         path.interpolate(max(2, math.ceil(length / SAMPLE_STEP) + 1))
         poses = np.array([[s.getX(), s.getY(), s.getYaw()]
                           for s in (path.getState(i) for i in range(path.getStateCount()))])
@@ -253,14 +268,171 @@ def guide_path(
         del planner, pdef
     if history and length < history[-1][1]:
         history.append((time.perf_counter() - t0, length))
-    points = lift(poses, x0, xg, car.wheelbase, radius)
+    if legs is None:
+        points = lift(poses, x0, xg, car.wheelbase, radius)
+    else:
+        points = lift_legs(merge_legs(legs), x0, xg, car.wheelbase)
     return GuidePath(tuple(tuple(float(c) for c in p) for p in points), length,
                      tuple(history), radius)
 
 
+def _edge_poses(space: Any, a: Any, b: Any) -> np.ndarray:
+    """Dense samples ``(N, 3)`` of the Reeds–Shepp curve from state ``a`` to ``b``, every
+    :data:`LEG_SAMPLE_STEP` of arc length at most."""
+    n = max(2, math.ceil(float(space.distance(a, b)) / LEG_SAMPLE_STEP) + 1)
+    out: Any = space.allocState()
+    poses = np.empty((n, 3))
+    for i, t in enumerate(np.linspace(0.0, 1.0, n)):
+        space.interpolate(a, b, float(t), out)
+        poses[i] = out.getX(), out.getY(), out.getYaw()
+    return poses
+
+
+def merge_legs(legs: Sequence[Leg]) -> list[Leg]:
+    """Consecutive legs of the same curvature and direction of travel as one."""
+    out: list[Leg] = []
+    for leg in legs:
+        if out and out[-1].kappa == leg.kappa and (out[-1].length > 0) == (leg.length > 0):
+            out[-1] = Leg(leg.kappa, out[-1].length + leg.length)
+        else:
+            out.append(leg)
+    return out
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One leg of a Reeds–Shepp path: curvature ``kappa`` (``0`` or ``±1/r``, positive to
+    the left) driven for the signed arc length ``length`` (negative: backwards)."""
+
+    kappa: float
+    length: float
+
+
+def leg_end(pose: Sequence[float], kappa: float, s: float) -> np.ndarray:
+    """The pose ``(x, y, θ)`` reached from ``pose`` along an arc of curvature ``kappa``
+    (a straight line when ``0``) after the signed arc length ``s`` (closed form; ``θ``
+    is a real number, not reduced modulo ``2π``)."""
+    x, y, th = (float(c) for c in pose)
+    if kappa == 0.0:
+        return np.array([x + s * math.cos(th), y + s * math.sin(th), th])
+    end = th + kappa * s
+    return np.array([x + (math.sin(end) - math.sin(th)) / kappa,
+                     y - (math.cos(end) - math.cos(th)) / kappa, end])
+
+
+def edge_legs(poses: np.ndarray, radius: float) -> list[Leg]:
+    """The legs of one Reeds–Shepp curve from its dense samples ``poses (N, 3)`` (yaw modulo
+    ``2π``, first and last the curve's ends), with their lengths solved exactly.
+
+    The samples give each leg's curvature and direction of travel and its length to a
+    sample step; the lengths are then corrected by least-norm Gauss–Newton so that the
+    legs, driven in closed form (:func:`leg_end`) from the first pose, end at the last one
+    (``≤`` :data:`LEG_TOL`).  OMPL's Python bindings expose a Reeds–Shepp curve's length
+    but not its type, hence the classification.
+
+    Raises
+    ------
+    PlanningError
+        The lengths do not converge or a leg's length changes sign (a sample step across
+        a switch classified wrongly): the caller keeps the sampled path.
+    """
+    d = np.diff(poses[:, :2], axis=0)
+    dyaw = np.angle(np.exp(1j * np.diff(poses[:, 2])))
+    ds = np.linalg.norm(d, axis=1)
+    along = d[:, 0] * np.cos(poses[:-1, 2]) + d[:, 1] * np.sin(poses[:-1, 2])
+    sign = np.where(along >= 0, 1.0, -1.0)
+    moving = ds > 1e-12
+    with np.errstate(divide="ignore", invalid="ignore"):
+        turn = np.rint(np.where(moving, dyaw * radius / (sign * ds), 0.0)).clip(-1, 1)
+    runs: list[list[float]] = []  # [turn, sign, length, steps]
+    for i in np.flatnonzero(moving):
+        if runs and runs[-1][0] == turn[i] and runs[-1][1] == sign[i]:
+            runs[-1][2] += float(ds[i])
+            runs[-1][3] += 1
+        else:
+            runs.append([float(turn[i]), float(sign[i]), float(ds[i]), 1])
+    # a step across a switch may be classified as neither leg: one-step runs go to the
+    # neighbours (their length is solved below anyway)
+    runs = [r for r in runs if r[3] > 1 or len(runs) == 1]
+    merged: list[list[float]] = []
+    for r in runs:
+        if merged and merged[-1][:2] == r[:2]:
+            merged[-1][2] += r[2]
+        else:
+            merged.append(r)
+    if not merged:
+        return []
+    kappa = np.array([r[0] / radius for r in merged])
+    direction = np.array([r[1] for r in merged])
+    lengths = np.array([r[2] for r in merged])
+    start, target = poses[0], poses[-1]
+
+    def residual(ls: np.ndarray) -> np.ndarray:
+        q = start
+        for k, s in zip(kappa, direction * ls, strict=True):
+            q = leg_end(q, float(k), float(s))
+        r = q - target
+        r[2] = math.remainder(float(r[2]), 2 * math.pi)
+        return r
+
+    for _ in range(LEG_ITERATIONS):
+        r = residual(lengths)
+        if float(np.abs(r).max()) <= LEG_TOL:
+            break
+        jac = np.empty((3, len(lengths)))
+        for j in range(len(lengths)):
+            h = np.zeros(len(lengths))
+            h[j] = 1e-7
+            jac[:, j] = (residual(lengths + h) - r) / 1e-7
+        lengths = lengths - np.linalg.lstsq(jac, r, rcond=None)[0]
+    if not (float(np.abs(residual(lengths)).max()) <= LEG_TOL and np.all(lengths > -LEG_TOL)):
+        raise PlanningError("a Reeds-Shepp curve's legs could not be solved from its samples")
+    return [Leg(float(k), float(s)) for k, s in zip(kappa, direction * np.maximum(lengths, 0.0),
+                                                    strict=True) if abs(s) > LEG_TOL]
+
+
+def lift_legs(legs: Sequence[Leg], x0: np.ndarray, xg: np.ndarray, wheelbase: float
+              ) -> list[np.ndarray]:
+    """Waypoints ``(x, y, θ, φ)`` of the legs driven from ``x0`` (module doc, step 2).
+
+    Along a leg of curvature ``κ``, ``φ = atan(L κ)``; waypoints every
+    :data:`WAYPOINT_STEP` of arc length, on the leg (closed form); between legs of
+    different ``κ``, a waypoint at the same pose with the new ``φ`` (the wheels turned at
+    rest).  The last waypoint is ``xg`` (its ``φ`` reached at rest).
+
+    Raises
+    ------
+    PlanningError
+        The legs do not end at ``xg``'s pose (the heading turned by another multiple of
+        ``2π`` than ``xg`` asks: headings are real numbers).
+    """
+    out = [np.asarray(x0, dtype=float).copy()]
+    for leg in legs:
+        phi = math.atan(wheelbase * leg.kappa)
+        if abs(phi - float(out[-1][3])) > AT_REST:
+            out.append(np.array([*out[-1][:3], phi]))
+        pose = out[-1][:3]
+        k = max(1, math.ceil(abs(leg.length) / WAYPOINT_STEP - 1e-9))
+        for j in range(1, k + 1):
+            out.append(np.array([*leg_end(pose, leg.kappa, leg.length * j / k), phi]))
+    end = np.asarray(xg, dtype=float)
+    miss = out[-1][:3] - end[:3]
+    if abs(float(miss[2])) > 1e-3:
+        raise PlanningError(
+            f"the Reeds-Shepp path turns the heading by {out[-1][2] - x0[2]:.4g}, the goal "
+            f"asks for {xg[2] - x0[2]:.4g} (headings are real numbers, not angles modulo 2 pi)")
+    if len(out) > 1:
+        out[-1][:3] = end[:3]  # the legs end at the goal's pose up to rounding
+    if abs(float(end[3]) - float(out[-1][3])) > AT_REST:
+        out.append(end.copy())
+    out[-1] = end.copy()
+    return out
+
+
 def lift(poses: np.ndarray, x0: np.ndarray, xg: np.ndarray, wheelbase: float,
          radius: float) -> list[np.ndarray]:
-    """Waypoints ``(x, y, θ, φ)`` of a Reeds–Shepp path sampled densely (module doc, step 2).
+    """Waypoints ``(x, y, θ, φ)`` of a Reeds–Shepp path sampled densely: the fallback of
+    :func:`lift_legs` when a curve's legs cannot be solved (module doc, step 2).
 
     ``poses (N, 3)``: ``(x, y, yaw)`` along the path (yaw modulo ``2π``), from ``x0``'s pose
     to ``xg``'s; ``radius``: the path's turning radius.  The first waypoint is ``x0``, the
@@ -352,6 +524,9 @@ def exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray
     d = w - prev
     if float(np.abs(d[:3]).max()) <= AT_REST:
         u = (0.0, float(w[3] - x[3]))
+        # the motion check covers the steps between samples by half a step of φ: a turn
+        # ending at ±φ_g must take steps of at most 2 PHI_MARGIN
+        points = max(points, math.ceil(abs(u[1]) / PHI_MARGIN) + 1)
     elif abs(float(d[3])) <= AT_REST:
         kappa = math.tan(float(prev[3])) / wheelbase
         if abs(kappa) > 1e-12:

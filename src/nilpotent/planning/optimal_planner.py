@@ -66,6 +66,8 @@ __all__ = [
 #: Global planners of :func:`~nilpotent.planning.global_planner.plan_global`: the holonomic
 #: stage's OMPL planner.
 PLANNERS = ("rrtconnect", "rrtstar", "reeds-shepp")
+#: Share of the time left that the Reeds–Shepp guide may take (the others: half).
+GUIDE_SHARE = 0.8
 #: The share of its time that RRT* spends improving its first path (:class:`HolonomicStage`).
 IMPROVE_FRACTION = 0.5
 #: Constant of the weight ≥ 2 terms of the ball–box cost (module doc).
@@ -313,6 +315,9 @@ class HolonomicStage:
             self.car = car_geometry(checker.system, checker)
         self.planner, self.piece = planner, piece
         self.found: list[Any] = []
+        #: Share of the time left that the stage may take: the guide's legs are driven
+        #: exactly (little steering left to do), the other stages' paths are steered.
+        self.share = GUIDE_SHARE if planner == "reeds-shepp" else 0.5
 
     def path(self, *args: Any, **kwargs: Any) -> list[np.ndarray]:
         """The path from OMPL (RRTConnect, RRT* under the ball–box cost, or the lifted
