@@ -25,7 +25,7 @@ from nilpotent.cli import app
 from nilpotent.errors import OptionError
 from nilpotent.models import get_model
 from nilpotent.planning.global_planner import plan_global
-from nilpotent.planning.guide import RADIUS_FACTOR, lift
+from nilpotent.planning.guide import PHI_MARGIN, lift
 from nilpotent.planning.world import load_world
 from replay import resimulate
 from test_optimal_planner import car_body_points
@@ -93,7 +93,8 @@ def test_reeds_shepp_plan_replays_collision_free(name):
     signs = np.sign(along[np.abs(along) > 1e-9])
     assert int(np.sum(signs[1:] != signs[:-1])) <= 100
     # the guide's own length: at least the obstacle-free distance of its larger radius
-    assert out["path_cost"] >= 0.999 * reeds_shepp_distance(start, goal, RADIUS_FACTOR)
+    radius = 0.6 / math.tan(PHI_MAX - PHI_MARGIN)
+    assert out["path_cost"] >= 0.999 * reeds_shepp_distance(start, goal, radius)
 
 
 def test_not_car_like_refused():
