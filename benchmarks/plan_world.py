@@ -201,7 +201,8 @@ def run_ours(system, world: World, checker: Checker, start, goal, budget: float,
     try:
         g = plan_global(system, start, goal, TOL, world=world, time_limit=budget, seed=seed,
                         engine=ENGINE, planner=planner)
-    except NilpotentError:
+    except NilpotentError as e:
+        print(f"  {planner} failed: {e}", file=sys.stderr)
         return row(False, time.perf_counter() - t)
     seconds = time.perf_counter() - t
     q, drive = resimulate(system, start, g.plan.segments)
