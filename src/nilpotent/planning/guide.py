@@ -15,8 +15,9 @@ the car can follow exactly.
    bounds from the world (else the box of
    :func:`~nilpotent.planning.holonomic_path.box`); a pose is valid when the
    configuration ``(x, y, θ, φ)`` is, for each ``φ ∈ {−φ_g, 0, φ_g}`` (every steering
-   angle the lifted path can take), under the planner's validity check.  The path is
-   simplified by OMPL.
+   angle the lifted path can take), under the checker's validity with the extra clearance
+   :data:`GUIDE_MARGIN` (not the 0.2 that plan_global keeps for steered pieces: the legs
+   are driven exactly).  The path is simplified by OMPL.
 2. **Lift** (:func:`lift_legs`): the legs of each Reeds–Shepp curve of the path
    (curvature ``κ ∈ {−1/r_g, 0, 1/r_g}``, direction of travel) are classified from its
    samples and their lengths solved so that they end exactly at the curve's end
@@ -100,6 +101,13 @@ IMPROVE_FRACTION = 0.5
 IMPROVE_SECONDS = 15.0
 #: Largest step (length units) at which OMPL checks the poses along a motion.
 CHECK_STEP = 0.02
+#: Extra clearance of the guide's poses (without a validity check given): OMPL's check
+#: every :data:`CHECK_STEP` leaves the body up to about half a step between samples
+#: unchecked, and the exact legs are then checked with a cover (:func:`exact_piece`); with no
+#: margin, legs grazing the corner's wall failed that check and were steered (10 reversals).
+GUIDE_MARGIN = CHECK_STEP
+#: Largest arc length between the samples of an exact leg (:func:`exact_piece`).
+EXACT_STEP = 0.002
 
 
 @dataclass(frozen=True)
@@ -204,7 +212,9 @@ def guide_path(
     """The Reeds–Shepp guide from ``x0`` to ``xg`` (module doc), within ``seconds``.
 
     Parameters as :func:`~nilpotent.planning.holonomic_path.ompl_path` (``held`` is
-    ignored: ``φ`` is set by the lifting, from ``x0``'s to ``xg``'s).
+    ignored: ``φ`` is set by the lifting, from ``x0``'s to ``xg``'s); without ``valid``,
+    the checker's validity with the extra clearance :data:`GUIDE_MARGIN` (none when the
+    start or the goal lacks it).
 
     Raises
     ------
@@ -221,7 +231,15 @@ def guide_path(
     car = car_geometry(checker.system, checker)
     phi_g = car.phi_max - PHI_MARGIN
     radius = car.wheelbase / math.tan(phi_g)
-    is_valid = checker.valid if valid is None else valid
+    if valid is None:
+        def is_valid(q: np.ndarray) -> np.ndarray:
+            return checker.valid(q, margin)
+
+        # the margin unless the start or the goal lacks it (a car parked close to a wall)
+        ends = np.array([[*q[:3], phi] for q in (x0, xg) for phi in (-phi_g, 0.0, phi_g)])
+        margin = GUIDE_MARGIN if bool(np.all(checker.valid(ends, GUIDE_MARGIN))) else 0.0
+    else:
+        is_valid = valid
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     if seed is not None:
         ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
@@ -605,6 +623,9 @@ def exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray
         if not math.isfinite(s) or abs(s) < 0.5 * float(np.hypot(d[0], d[1])):
             return None  # not one leg (e.g. a halved piece across a switch)
         u = (s, 0.0)
+        # samples every EXACT_STEP of arc length: the motion check's cover between them
+        # stays within the guide's margin (GUIDE_MARGIN)
+        points = max(points, math.ceil(abs(s) / EXACT_STEP) + 1)
     else:
         return None
     segs = (constant_segment(np.array(u), 1.0),)
