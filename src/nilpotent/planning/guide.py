@@ -44,6 +44,7 @@ radius is ``L / tan φ_max`` (the smaller side of an asymmetric limit).
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 import math
 import time
@@ -232,14 +233,11 @@ def guide_path(
     phi_g = car.phi_max - PHI_MARGIN
     radius = car.wheelbase / math.tan(phi_g)
     if valid is None:
-        def is_valid(q: np.ndarray) -> np.ndarray:
-            return checker.valid(q, margin)
-
         # the margin unless the start or the goal lacks it (a car parked close to a wall)
         ends = np.array([[*q[:3], phi] for q in (x0, xg) for phi in (-phi_g, 0.0, phi_g)])
         margin = GUIDE_MARGIN if bool(np.all(checker.valid(ends, GUIDE_MARGIN))) else 0.0
-    else:
-        is_valid = valid
+        valid = functools.partial(checker.valid, extra_clearance=margin)
+    is_valid = valid
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     if seed is not None:
         ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
