@@ -96,8 +96,8 @@ WAYPOINT_STEP = 0.25
 #: tolerance at a waypoint is a tenth of the piece: small turns leave the car on the path).
 PHI_STEP = 0.1
 #: Share of its time RRT* spends improving its first path, at most :data:`IMPROVE_SECONDS`
-#: (the car-parking pairs of benchmarks/plan_world.py: 1.66–1.70 × Reeds–Shepp RRT* of a
-#: 30 s budget after 3 s of improvement, within 1.1 × after 7–17 s).
+#: (benchmarks/plan_world.py, 30 s per query, the stage's 0.8 of it: about 11 s of
+#: improvement, within 1.02 × Reeds–Shepp RRT* run for the whole 30 s on 8 pairs).
 IMPROVE_FRACTION = 0.5
 IMPROVE_SECONDS = 15.0
 #: Largest step (length units) at which OMPL checks the poses along a motion.
