@@ -184,3 +184,32 @@ def test_lift_legs_refuse_another_turn_of_the_heading():
         lift_legs(legs, x0, np.array([*end[:2], end[2] + 2 * math.pi, 0.0]), WHEELBASE)
     with pytest.raises(PlanningError, match="goal"):
         lift_legs(legs, x0, np.array([end[0] + 1e-3, end[1], end[2], 0.0]), WHEELBASE)
+
+
+def test_guide_path_in_the_open_is_driven_exactly_to_the_goal():
+    """Without obstacles the guide is (near) the Reeds–Shepp curve of its radius, and its
+    waypoints, driven piece by piece by the exact flows (``exact_piece``, each from the
+    state the last one reached), end at the goal."""
+    pytest.importorskip("ompl")
+    from nilpotent.models import get_model
+    from nilpotent.planning.guide import exact_piece, guide_path
+    from nilpotent.planning.verify import Checker
+
+    system = get_model("car")
+    checker = Checker(system)
+    x0, xg = np.array([0.0, 0.0, 0.0, 0.2]), np.array([1.5, 0.8, 2.0, 0.0])
+    # the first path comes in milliseconds in the open; the rest of the 2 s improves it
+    guide = guide_path(checker, x0, xg, seconds=2.0, seed=0)
+    assert guide.radius == pytest.approx(RADIUS, rel=1e-12)
+    ob = pytest.importorskip("ompl.base")
+    space = ob.ReedsSheppStateSpace(RADIUS)
+    distance = space.distance(rs_state(space, x0), rs_state(space, xg))
+    assert distance - 1e-9 <= guide.length <= 1.05 * distance
+    pts = [np.array(p) for p in guide.points]
+    assert np.array_equal(pts[0], x0) and np.array_equal(pts[-1], xg)
+    x = x0
+    for prev, w in itertools.pairwise(pts):
+        piece = exact_piece(checker, x, prev, w, 1e-8, 20, WHEELBASE)
+        assert piece is not None
+        x = np.array(piece.reached)
+    assert np.allclose(x, xg, atol=1e-8)
