@@ -21,8 +21,8 @@ Methods, same time budget per query, same pairs:
 * ``rrtstar``: the same with ``planner="rrtstar"`` (OMPL RRT* under the ball–box cost,
   :mod:`nilpotent.planning.optimal_planner`);
 * ``guide`` (``car`` only): the same with ``planner="reeds-shepp"`` (an OMPL Reeds–Shepp
-  path lifted to the car's configurations and steered piece by piece,
-  :mod:`nilpotent.planning.guide`);
+  path lifted to the car's configurations, its legs driven exactly piece by piece,
+  :mod:`nilpotent.planning.guide`); a failure prints its reason on stderr;
 * ``rs`` (``car`` only): OMPL RRT* in ``ReedsSheppStateSpace(rmin)`` (``rmin`` the model's
   parameter), the same validity check (the car's outline with ``φ = 0``) at the
   resolution of OMPL's default; it runs the whole budget (anytime) and the time reported
@@ -201,7 +201,8 @@ def run_ours(system, world: World, checker: Checker, start, goal, budget: float,
     try:
         g = plan_global(system, start, goal, TOL, world=world, time_limit=budget, seed=seed,
                         engine=ENGINE, planner=planner)
-    except NilpotentError:
+    except NilpotentError as e:
+        print(f"  {planner} failed: {e}", file=sys.stderr)
         return row(False, time.perf_counter() - t)
     seconds = time.perf_counter() - t
     q, drive = resimulate(system, start, g.plan.segments)

@@ -9,22 +9,29 @@ Math. 145(2), 1990): this stage plans with them and hands the steering pieces
 the car can follow exactly.
 
 1. **Search** (:func:`guide_path`): OMPL RRT* (path length; after its first path it
-   improves it for half its time, at most :data:`IMPROVE_SECONDS`) in
-   ``ob.ReedsSheppStateSpace(r_g)``, ``r_g =`` :data:`RADIUS_FACTOR` × the car's
-   least turning radius (room for the steering to stay inside the ``φ`` limit),
+   improves it for :data:`IMPROVE_FRACTION` of its time, at most :data:`IMPROVE_SECONDS`)
+   in ``ob.ReedsSheppStateSpace(r_g)``, ``r_g = L / tan φ_g`` with
+   ``φ_g = φ_max −`` :data:`PHI_MARGIN` (0.56 % above the car's least turning radius),
    bounds from the world (else the box of
    :func:`~nilpotent.planning.holonomic_path.box`); a pose is valid when the
-   configuration ``(x, y, θ, φ)`` is, for each ``φ ∈ {−φ_g, 0, φ_g}``
-   (``φ_g = atan(L / r_g)``, every steering angle the lifted path can take),
-   under the planner's validity check.  The path is simplified by OMPL.
-2. **Lift** (:func:`lift`): the path, sampled every :data:`SAMPLE_STEP` of arc
-   length, is cut where its curvature ``κ ∈ {−1/r_g, 0, 1/r_g}`` or its direction of
-   travel changes; along each leg ``φ = atan(L κ)`` (``θ̇ = v tan φ / L``), with
-   waypoints every :data:`WAYPOINT_STEP`; where ``κ`` changes, two waypoints at the
-   same pose with the old and the new ``φ``: the car turns its wheels at rest (the
-   steering field ``∂_φ``).  The heading is unwrapped from the start's ``θ``.
+   configuration ``(x, y, θ, φ)`` is, for each ``φ ∈ {−φ_g, 0, φ_g}`` (every steering
+   angle the lifted path can take), under the checker's validity with the extra clearance
+   :data:`GUIDE_MARGIN` (not the 0.2 that plan_global keeps for steered pieces: the legs
+   are driven exactly).  The path is simplified by OMPL.
+2. **Lift** (:func:`lift_legs`): the legs of each Reeds–Shepp curve of the path
+   (curvature ``κ ∈ {−1/r_g, 0, 1/r_g}``, direction of travel) are classified from its
+   samples and their lengths solved so that they end exactly at the curve's end
+   (:func:`edge_legs`); along each leg ``φ = atan(L κ)`` (``θ̇ = v tan φ / L``), with
+   waypoints every :data:`WAYPOINT_STEP` on the leg (closed form, :func:`leg_end`); where
+   ``κ`` changes, waypoints at the same pose with ``φ`` from the old to the new value, in
+   steps of at most :data:`PHI_STEP`: the car turns its wheels at rest (the steering
+   field ``∂_φ``).  The heading is a real number from the start's ``θ``.  When a curve's
+   legs cannot be solved, the path sampled every :data:`SAMPLE_STEP` is cut into legs
+   instead (:func:`lift`, the fallback: waypoints on the samples).
 3. The waypoints are the path :func:`~nilpotent.planning.global_planner.plan_global`
-   steers piece by piece and verifies, as for the other holonomic stages.
+   follows piece by piece and verifies, as for the other holonomic stages; a piece that is
+   one leg or one turn at rest is driven by that exact motion (:func:`exact_piece`),
+   the others are steered.
 
 **Car-like** (:func:`car_geometry`): a model with coordinates named
 ``x, y, theta, phi`` and two fields, ``X1 = cos θ ∂x + sin θ ∂y + (tan φ / L) ∂θ``
@@ -36,6 +43,8 @@ radius is ``L / tan φ_max`` (the smaller side of an asymmetric limit).
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import itertools
 import math
 import time
@@ -52,8 +61,8 @@ from nilpotent.planning.holonomic_path import SIMPLIFY_SECONDS, anytime_solve, b
 from nilpotent.planning.verify import Checker
 
 __all__ = [
-    "CAR_COORDINATES", "PHI_MARGIN", "CarGeometry", "GuidePath", "car_geometry",
-    "exact_piece", "guide_path", "lift",
+    "CAR_COORDINATES", "PHI_MARGIN", "CarGeometry", "GuidePath", "Leg", "car_geometry",
+    "edge_legs", "exact_piece", "guide_path", "leg_end", "lift", "lift_legs", "merge_legs",
 ]
 
 #: Coordinates of a car-like model, in order.
@@ -71,18 +80,35 @@ SAMPLE_STEP = 0.01
 LEG_SAMPLE_STEP = 0.002
 LEG_ITERATIONS = 20
 LEG_TOL = 1e-11
+#: How far a step's ``κ r`` may be from ``−1, 0, 1`` (and ``1 −`` its share along the
+#: heading) for it to be classified (:func:`edge_legs`).
+CLEAN_TOL = 0.1
+#: How much longer than OMPL's curve its solved legs may be (a leg shorter than a sample
+#: step is missed; a curve with four or five legs has a family of solutions, the least-norm
+#: one is kept: measured ``≤ 1e-4`` longer).
+LEG_LENGTH_TOL = 1e-3
+#: Largest distance between the end of the solved legs and the goal's pose
+#: (:func:`lift_legs`; each curve's legs end within :data:`LEG_TOL` of its end).
+LEG_END_TOL = 1e-8
 #: Largest arc length between two waypoints of one leg.
 WAYPOINT_STEP = 0.25
 #: Largest change of ``φ`` between two waypoints where the wheels turn at rest (the
 #: tolerance at a waypoint is a tenth of the piece: small turns leave the car on the path).
 PHI_STEP = 0.1
 #: Share of its time RRT* spends improving its first path, at most :data:`IMPROVE_SECONDS`
-#: (the car-parking pairs of benchmarks/plan_world.py: 1.66–1.70 × Reeds–Shepp RRT* of a
-#: 30 s budget after 3 s of improvement, within 1.1 × after 7–17 s).
+#: (benchmarks/plan_world.py, 30 s per query, the stage's 0.8 of it: about 11 s of
+#: improvement, within 1.02 × Reeds–Shepp RRT* run for the whole 30 s on 8 pairs).
 IMPROVE_FRACTION = 0.5
 IMPROVE_SECONDS = 15.0
 #: Largest step (length units) at which OMPL checks the poses along a motion.
 CHECK_STEP = 0.02
+#: Extra clearance of the guide's poses (without a validity check given): OMPL's check
+#: every :data:`CHECK_STEP` leaves the body up to about half a step between samples
+#: unchecked, and the exact legs are then checked with a cover (:func:`exact_piece`); with no
+#: margin, legs grazing the corner's wall failed that check and were steered (10 reversals).
+GUIDE_MARGIN = CHECK_STEP
+#: Largest arc length between the samples of an exact leg (:func:`exact_piece`).
+EXACT_STEP = 0.002
 
 
 @dataclass(frozen=True)
@@ -187,7 +213,9 @@ def guide_path(
     """The Reeds–Shepp guide from ``x0`` to ``xg`` (module doc), within ``seconds``.
 
     Parameters as :func:`~nilpotent.planning.holonomic_path.ompl_path` (``held`` is
-    ignored: ``φ`` is set by the lifting, from ``x0``'s to ``xg``'s).
+    ignored: ``φ`` is set by the lifting, from ``x0``'s to ``xg``'s); without ``valid``,
+    the checker's validity with the extra clearance :data:`GUIDE_MARGIN` (none when the
+    start or the goal lacks it).
 
     Raises
     ------
@@ -204,7 +232,12 @@ def guide_path(
     car = car_geometry(checker.system, checker)
     phi_g = car.phi_max - PHI_MARGIN
     radius = car.wheelbase / math.tan(phi_g)
-    is_valid = checker.valid if valid is None else valid
+    if valid is None:
+        # the margin unless the start or the goal lacks it (a car parked close to a wall)
+        ends = np.array([[*q[:3], phi] for q in (x0, xg) for phi in (-phi_g, 0.0, phi_g)])
+        margin = GUIDE_MARGIN if bool(np.all(checker.valid(ends, GUIDE_MARGIN))) else 0.0
+        valid = functools.partial(checker.valid, extra_clearance=margin)
+    is_valid = valid
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     if seed is not None:
         ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
@@ -255,7 +288,8 @@ def guide_path(
         vertices = [path.getState(i) for i in range(path.getStateCount())]
         try:
             legs = [leg for a, b in itertools.pairwise(vertices)
-                    for leg in edge_legs(_edge_poses(space, a, b), radius)]
+                    for leg in edge_legs(_edge_poses(space, a, b), radius,
+                                         float(space.distance(a, b)))]
         except PlanningError:
             legs = None  # a curve not solved: its dense samples lifted instead
         path.interpolate(max(2, math.ceil(length / SAMPLE_STEP) + 1))
@@ -268,10 +302,12 @@ def guide_path(
         del planner, pdef
     if history and length < history[-1][1]:
         history.append((time.perf_counter() - t0, length))
-    if legs is None:
+    points = None
+    if legs is not None:
+        with contextlib.suppress(PlanningError):  # lift raises the heading's error again
+            points = lift_legs(merge_legs(legs), x0, xg, car.wheelbase)
+    if points is None:
         points = lift(poses, x0, xg, car.wheelbase, radius)
-    else:
-        points = lift_legs(merge_legs(legs), x0, xg, car.wheelbase)
     return GuidePath(tuple(tuple(float(c) for c in p) for p in points), length,
                      tuple(history), radius)
 
@@ -308,7 +344,7 @@ class Leg:
     length: float
 
 
-def leg_end(pose: Sequence[float], kappa: float, s: float) -> np.ndarray:
+def leg_end(pose: Sequence[float] | np.ndarray, kappa: float, s: float) -> np.ndarray:
     """The pose ``(x, y, θ)`` reached from ``pose`` along an arc of curvature ``kappa``
     (a straight line when ``0``) after the signed arc length ``s`` (closed form; ``θ``
     is a real number, not reduced modulo ``2π``)."""
@@ -320,21 +356,30 @@ def leg_end(pose: Sequence[float], kappa: float, s: float) -> np.ndarray:
                      y - (math.cos(end) - math.cos(th)) / kappa, end])
 
 
-def edge_legs(poses: np.ndarray, radius: float) -> list[Leg]:
+def edge_legs(poses: np.ndarray, radius: float, length: float | None = None) -> list[Leg]:
     """The legs of one Reeds–Shepp curve from its dense samples ``poses (N, 3)`` (yaw modulo
     ``2π``, first and last the curve's ends), with their lengths solved exactly.
 
-    The samples give each leg's curvature and direction of travel and its length to a
-    sample step; the lengths are then corrected by least-norm Gauss–Newton so that the
-    legs, driven in closed form (:func:`leg_end`) from the first pose, end at the last one
-    (``≤`` :data:`LEG_TOL`).  OMPL's Python bindings expose a Reeds–Shepp curve's length
-    but not its type, hence the classification.
+    Each step between samples whose curvature ``κ r ∈ {−1, 0, 1}`` and direction of travel
+    are clear (within :data:`CLEAN_TOL`; a step across a switch or a cusp mixes two legs and
+    is left out) is classified; runs of one class are the legs, their summed steps the
+    first guess of their lengths.  The lengths are then corrected by least-norm
+    Gauss–Newton so that the legs, driven in closed form (:func:`leg_end`) from the first
+    pose, end at the last one (``≤`` :data:`LEG_TOL`).  Two structures are tried: with
+    every run, and without the runs of one step (a mixed step that looked clear); if
+    neither converges with lengths of the classified signs, each class of leg in place of
+    each mixed step (a leg shorter than two steps).  The shortest solution is kept.
+    OMPL's Python bindings expose a Reeds–Shepp curve's length but not its type or its
+    legs' lengths, hence the classification.
+
+    ``length``: the curve's length (OMPL's ``distance``), when given the legs' total
+    ``|length|`` must be within :data:`LEG_LENGTH_TOL` of it (the same curve, up to a leg
+    shorter than a step).
 
     Raises
     ------
     PlanningError
-        The lengths do not converge or a leg's length changes sign (a sample step across
-        a switch classified wrongly): the caller keeps the sampled path.
+        No structure converges within ``length`` (the caller keeps the sampled path).
     """
     d = np.diff(poses[:, :2], axis=0)
     dyaw = np.angle(np.exp(1j * np.diff(poses[:, 2])))
@@ -343,29 +388,67 @@ def edge_legs(poses: np.ndarray, radius: float) -> list[Leg]:
     sign = np.where(along >= 0, 1.0, -1.0)
     moving = ds > 1e-12
     with np.errstate(divide="ignore", invalid="ignore"):
-        turn = np.rint(np.where(moving, dyaw * radius / (sign * ds), 0.0)).clip(-1, 1)
+        turn = np.where(moving, dyaw * radius / (sign * ds), np.nan)
+        clean = (moving & (np.abs(turn - np.rint(turn)) <= CLEAN_TOL)
+                 & (np.abs(turn) <= 1 + CLEAN_TOL) & (np.abs(along) >= (1 - CLEAN_TOL) * ds))
+    steps = {int(i): (float(np.rint(turn[i])), float(sign[i]), float(ds[i]))
+             for i in np.flatnonzero(clean)}
+    if not np.any(moving):
+        return []
+    found: list[list[Leg]] = []
+    tried: list[list[tuple[float, float]]] = []
+
+    def attempt(classified: dict[int, tuple[float, float, float]], drop_single: bool) -> None:
+        runs = _runs([classified[i] for i in sorted(classified)], drop_single)
+        if runs and [r[:2] for r in runs] not in tried:
+            tried.append([r[:2] for r in runs])
+            legs = _solve_legs(runs, radius, poses[0], poses[-1])
+            if legs is not None and (length is None or sum(abs(leg.length) for leg in legs)
+                                     <= length + LEG_LENGTH_TOL):
+                found.append(legs)
+
+    for drop_single in (False, True):
+        attempt(steps, drop_single)
+    if not found:
+        # a leg shorter than two steps can hide in a mixed step: try each class there
+        for i in np.flatnonzero(moving & ~clean):
+            for k, direction in itertools.product((-1.0, 0.0, 1.0), (-1.0, 1.0)):
+                attempt({**steps, int(i): (k, direction, 0.5 * float(ds[i]))}, False)
+    if not found:
+        raise PlanningError("a Reeds-Shepp curve's legs could not be solved from its samples")
+    return min(found, key=lambda legs: sum(abs(leg.length) for leg in legs))
+
+
+def _runs(steps: Sequence[tuple[float, float, float]], drop_single: bool
+          ) -> list[tuple[float, float, float]]:
+    """``(κ r, direction, length)`` of the runs of classified steps ``(κ r, direction, ds)``
+    (without the runs of one step if ``drop_single`` and more than one run)."""
     runs: list[list[float]] = []  # [turn, sign, length, steps]
-    for i in np.flatnonzero(moving):
-        if runs and runs[-1][0] == turn[i] and runs[-1][1] == sign[i]:
-            runs[-1][2] += float(ds[i])
+    for turn, sign, ds in steps:
+        if runs and runs[-1][0] == turn and runs[-1][1] == sign:
+            runs[-1][2] += ds
             runs[-1][3] += 1
         else:
-            runs.append([float(turn[i]), float(sign[i]), float(ds[i]), 1])
-    # a step across a switch may be classified as neither leg: one-step runs go to the
-    # neighbours (their length is solved below anyway)
-    runs = [r for r in runs if r[3] > 1 or len(runs) == 1]
+            runs.append([turn, sign, ds, 1])
+    if drop_single and len(runs) > 1:
+        runs = [r for r in runs if r[3] > 1]
     merged: list[list[float]] = []
     for r in runs:
         if merged and merged[-1][:2] == r[:2]:
             merged[-1][2] += r[2]
         else:
             merged.append(r)
-    if not merged:
-        return []
-    kappa = np.array([r[0] / radius for r in merged])
-    direction = np.array([r[1] for r in merged])
-    lengths = np.array([r[2] for r in merged])
-    start, target = poses[0], poses[-1]
+    return [(r[0], r[1], r[2]) for r in merged]
+
+
+def _solve_legs(runs: Sequence[tuple[float, float, float]], radius: float, start: np.ndarray,
+                target: np.ndarray) -> list[Leg] | None:
+    """The legs of ``runs`` (:func:`_runs`) with their lengths corrected by Gauss–Newton to
+    end at ``target`` from ``start`` (``None``: no convergence, or a length of the wrong
+    sign)."""
+    kappa = np.array([r[0] / radius for r in runs])
+    direction = np.array([r[1] for r in runs])
+    lengths = np.array([r[2] for r in runs])
 
     def residual(ls: np.ndarray) -> np.ndarray:
         q = start
@@ -386,7 +469,7 @@ def edge_legs(poses: np.ndarray, radius: float) -> list[Leg]:
             jac[:, j] = (residual(lengths + h) - r) / 1e-7
         lengths = lengths - np.linalg.lstsq(jac, r, rcond=None)[0]
     if not (float(np.abs(residual(lengths)).max()) <= LEG_TOL and np.all(lengths > -LEG_TOL)):
-        raise PlanningError("a Reeds-Shepp curve's legs could not be solved from its samples")
+        return None
     return [Leg(float(k), float(s)) for k, s in zip(kappa, direction * np.maximum(lengths, 0.0),
                                                     strict=True) if abs(s) > LEG_TOL]
 
@@ -397,20 +480,20 @@ def lift_legs(legs: Sequence[Leg], x0: np.ndarray, xg: np.ndarray, wheelbase: fl
 
     Along a leg of curvature ``κ``, ``φ = atan(L κ)``; waypoints every
     :data:`WAYPOINT_STEP` of arc length, on the leg (closed form); between legs of
-    different ``κ``, a waypoint at the same pose with the new ``φ`` (the wheels turned at
-    rest).  The last waypoint is ``xg`` (its ``φ`` reached at rest).
+    different ``κ``, waypoints at the same pose turning ``φ`` to the new value in steps of
+    at most :data:`PHI_STEP` (the wheels turned at rest).  The last waypoint is ``xg``
+    (its ``φ`` reached at rest).
 
     Raises
     ------
     PlanningError
-        The legs do not end at ``xg``'s pose (the heading turned by another multiple of
-        ``2π`` than ``xg`` asks: headings are real numbers).
+        The legs do not end at ``xg``'s pose (within :data:`LEG_END_TOL`; or the heading
+        turned by another multiple of ``2π`` than ``xg`` asks: headings are real numbers).
     """
     out = [np.asarray(x0, dtype=float).copy()]
     for leg in legs:
         phi = math.atan(wheelbase * leg.kappa)
-        if abs(phi - float(out[-1][3])) > AT_REST:
-            out.append(np.array([*out[-1][:3], phi]))
+        _turn(out, phi)
         pose = out[-1][:3]
         k = max(1, math.ceil(abs(leg.length) / WAYPOINT_STEP - 1e-9))
         for j in range(1, k + 1):
@@ -421,10 +504,12 @@ def lift_legs(legs: Sequence[Leg], x0: np.ndarray, xg: np.ndarray, wheelbase: fl
         raise PlanningError(
             f"the Reeds-Shepp path turns the heading by {out[-1][2] - x0[2]:.4g}, the goal "
             f"asks for {xg[2] - x0[2]:.4g} (headings are real numbers, not angles modulo 2 pi)")
+    if float(np.abs(miss).max()) > LEG_END_TOL:
+        raise PlanningError(f"the Reeds-Shepp legs end {float(np.abs(miss).max()):.3g} from "
+                            "the goal's pose")
     if len(out) > 1:
         out[-1][:3] = end[:3]  # the legs end at the goal's pose up to rounding
-    if abs(float(end[3]) - float(out[-1][3])) > AT_REST:
-        out.append(end.copy())
+    _turn(out, float(end[3]))
     out[-1] = end.copy()
     return out
 
@@ -536,6 +621,9 @@ def exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray
         if not math.isfinite(s) or abs(s) < 0.5 * float(np.hypot(d[0], d[1])):
             return None  # not one leg (e.g. a halved piece across a switch)
         u = (s, 0.0)
+        # samples every EXACT_STEP of arc length: the motion check's cover between them
+        # stays within the guide's margin (GUIDE_MARGIN)
+        points = max(points, math.ceil(abs(s) / EXACT_STEP) + 1)
     else:
         return None
     segs = (constant_segment(np.array(u), 1.0),)
