@@ -389,7 +389,7 @@ def main() -> None:
         plan_global(system, pairs[0][0], pairs[0][0] + 1e-3 * (pairs[0][1] - pairs[0][0]), TOL,
                     world=world, engine=ENGINE, time_limit=600)
         for method in args.methods.split(","):
-            if method == "rs" and system.name != "car" or (
+            if (method == "rs" and system.name != "car") or (
                     method == "guide" and spec["model"] not in ("car", "car-trailers:1")):
                 continue
             rows = []

@@ -43,7 +43,14 @@ import sympy as sp
 from nilpotent.core.model.outline import Limits
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError
-from nilpotent.planning.guide import GUIDE_MARGIN, PHI_MARGIN, GuidePath, guide_path
+from nilpotent.planning.guide import (
+    GUIDE_MARGIN,
+    PHI_MARGIN,
+    GuidePath,
+    Leg,
+    guide_path,
+    leg_end,
+)
 from nilpotent.planning.verify import Checker
 
 __all__ = [
@@ -231,46 +238,52 @@ SWEEP_STEP = 0.05
 
 def _validator(check: Callable[[np.ndarray], np.ndarray], phi_g: float, radius: float,
                space: Any, si: Any) -> Any:
-    """OMPL's motion validator of the trailer guide: the Reeds-Shepp curve's poses every
-    :data:`MOTION_STEP`, each at the hitch angle of the steps before and after it (its
-    curvature classified as in :func:`~nilpotent.planning.guide.lift`), with the car's turn
-    at rest between two such angles and from and to ``φ = 0`` at the curve's ends (so that
-    any turn at a vertex of the path, from one curve's last angle to the next one's first,
-    is covered)."""
+    """OMPL's motion validator of the trailer guide: the legs of the Reeds–Shepp curve
+    solved as the lifting will solve them (:func:`~nilpotent.planning.guide.edge_legs`; a
+    curve whose legs are not solved is invalid), each leg's poses every
+    :data:`MOTION_STEP` at its hitch angle, the car's turn at rest before each leg, and the
+    turns from and to ``φ = 0`` at the curve's ends (so that any turn at a vertex of the
+    path, from one curve's last angle to the next one's first, is covered)."""
     from ompl import base as ob
+
+    from nilpotent.errors import PlanningError
+    from nilpotent.planning.guide import _edge_poses, edge_legs
 
     class Validator(ob.MotionValidator):  # type: ignore[misc]
         def checkMotion(self, a: Any, b: Any, *rest: Any) -> bool:
-            length = float(space.distance(a, b))
-            n = max(2, math.ceil(length / MOTION_STEP) + 1)
-            out: Any = space.allocState()
-            poses = np.empty((n, 3))
-            for i, t in enumerate(np.linspace(0.0, 1.0, n)):
-                space.interpolate(a, b, float(t), out)
-                poses[i] = out.getX(), out.getY(), out.getYaw()
-            return bool(np.all(check(_motion_configs(poses, phi_g, radius))))
+            distance = float(space.distance(a, b))
+            poses = _edge_poses(space, a, b)
+            try:
+                legs = edge_legs(poses, radius, distance)
+            except PlanningError:
+                return False
+            return bool(np.all(check(_motion_configs(poses[0], legs, phi_g, radius))))
 
     return Validator(si)
 
 
-def _motion_configs(poses: np.ndarray, phi_g: float, radius: float) -> np.ndarray:
-    """Configurations ``(x1, y1, θ1, φ)`` to check along a Reeds-Shepp curve sampled at
-    ``poses (N, 3)`` (:func:`_validator`)."""
-    d = np.diff(poses[:, :2], axis=0)
-    dyaw = np.angle(np.exp(1j * np.diff(poses[:, 2])))
-    ds = np.linalg.norm(d, axis=1)
-    along = d[:, 0] * np.cos(poses[:-1, 2]) + d[:, 1] * np.sin(poses[:-1, 2])
-    sign = np.where(along >= 0, 1.0, -1.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        turn = np.where(ds > 1e-12, dyaw * radius / (sign * ds), 0.0)
-    phis = np.rint(np.nan_to_num(turn)).clip(-1, 1) * phi_g
-    before = np.concatenate(([0.0], phis))
-    after = np.concatenate((phis, [0.0]))
-    rows = []
-    for pose, p0, p1 in zip(poses, before, after, strict=True):
-        k = max(1, math.ceil(abs(p1 - p0) / SWEEP_STEP))
-        for phi in np.linspace(p0, p1, k + 1) if p0 != p1 else (p0,):
-            rows.append((*pose, phi))
+def _motion_configs(pose: np.ndarray, legs: Sequence[Leg], phi_g: float,
+                    radius: float) -> np.ndarray:
+    """Configurations ``(x1, y1, θ1, φ)`` to check along the ``legs`` driven from ``pose``
+    (:func:`_validator`): turns at rest in steps of at most :data:`SWEEP_STEP`, each leg's
+    poses every :data:`MOTION_STEP` of arc length at ``φ = ±φ_g`` or ``0``."""
+    rows: list[tuple[float, ...]] = []
+    phi = 0.0
+    pose = np.asarray(pose, dtype=float)
+
+    def sweep(to: float) -> None:
+        k = max(1, math.ceil(abs(to - phi) / SWEEP_STEP))
+        rows.extend((*pose, float(p)) for p in np.linspace(phi, to, k + 1))
+
+    for leg in legs:
+        turn = phi_g * float(np.sign(leg.kappa)) if abs(leg.kappa) * radius > 0.5 else 0.0
+        sweep(turn)
+        phi = turn
+        k = max(1, math.ceil(abs(leg.length) / MOTION_STEP))
+        rows.extend((*leg_end(pose, leg.kappa, leg.length * j / k), phi)
+                    for j in range(1, k + 1))
+        pose = leg_end(pose, leg.kappa, leg.length)
+    sweep(0.0)
     return np.array(rows)
 
 
