@@ -20,9 +20,11 @@ Methods, same time budget per query, same pairs:
   (verified: re-simulated, admissible, within ``TOL``);
 * ``rrtstar``: the same with ``planner="rrtstar"`` (OMPL RRT* under the ball–box cost,
   :mod:`nilpotent.planning.optimal_planner`);
-* ``guide`` (``car`` only): the same with ``planner="reeds-shepp"`` (an OMPL Reeds–Shepp
-  path lifted to the car's configurations, its legs driven exactly piece by piece,
-  :mod:`nilpotent.planning.guide`); a failure prints its reason on stderr;
+* ``guide`` (``car`` and ``car-trailers:1`` only): the same with ``planner="reeds-shepp"``
+  (an OMPL Reeds–Shepp path lifted to the car's configurations, its legs driven exactly
+  piece by piece, :mod:`nilpotent.planning.guide`; for one trailer, the path of the
+  trailer as a car, :mod:`nilpotent.planning.trailer_guide`); every method prints the
+  reason of a failure on stderr;
 * ``rs`` (``car`` only): OMPL RRT* in ``ReedsSheppStateSpace(rmin)`` (``rmin`` the model's
   parameter), the same validity check (the car's outline with ``φ = 0``) at the
   resolution of OMPL's default; it runs the whole budget (anytime) and the time reported
@@ -387,7 +389,8 @@ def main() -> None:
         plan_global(system, pairs[0][0], pairs[0][0] + 1e-3 * (pairs[0][1] - pairs[0][0]), TOL,
                     world=world, engine=ENGINE, time_limit=600)
         for method in args.methods.split(","):
-            if method in ("rs", "guide") and system.name != "car":
+            if (method == "rs" and system.name != "car") or (
+                    method == "guide" and spec["model"] not in ("car", "car-trailers:1")):
                 continue
             rows = []
             for k, (a, b) in enumerate(pairs):

@@ -209,13 +209,16 @@ def guide_path(
     resolution: float = 0.05,
     valid: Callable[[np.ndarray], np.ndarray] | None = None,
     held: Sequence[int] = (),
+    motion: Callable[[Any, Any], Any] | None = None,
 ) -> GuidePath:
     """The Reeds–Shepp guide from ``x0`` to ``xg`` (module doc), within ``seconds``.
 
     Parameters as :func:`~nilpotent.planning.holonomic_path.ompl_path` (``held`` is
     ignored: ``φ`` is set by the lifting, from ``x0``'s to ``xg``'s); without ``valid``,
     the checker's validity with the extra clearance :data:`GUIDE_MARGIN` (none when the
-    start or the goal lacks it).
+    start or the goal lacks it).  ``motion``: when given, ``motion(space, si)`` returns
+    OMPL's motion validator (default: OMPL's checks of the poses every :data:`CHECK_STEP`;
+    :mod:`nilpotent.planning.trailer_guide` checks the motion of the lifted legs).
 
     Raises
     ------
@@ -259,6 +262,9 @@ def guide_path(
     si.setStateValidityChecker(pose_valid)
     step = min(resolution, CHECK_STEP)
     si.setStateValidityCheckingResolution(step / max(space.getMaximumExtent(), 1e-12))
+    validator = None if motion is None else motion(space, si)
+    if validator is not None:
+        si.setMotionValidator(validator)
     si.setup()
     start: Any = space.allocState()  # SE(2) states (the stubs say State)
     goal: Any = space.allocState()

@@ -311,8 +311,12 @@ class HolonomicStage:
         self.car: Any = None  # the guide's CarGeometry, once (refuses a model not car-like)
         if planner == "reeds-shepp" and checker is not None:
             from nilpotent.planning.guide import car_geometry
+            from nilpotent.planning.trailer_guide import is_trailer_like, trailer_geometry
 
-            self.car = car_geometry(checker.system, checker)
+            if is_trailer_like(checker.system):  # the trailer as a car (trailer_guide)
+                self.car = trailer_geometry(checker.system, checker)
+            else:
+                self.car = car_geometry(checker.system, checker)
         self.planner, self.piece = planner, piece
         self.found: list[Any] = []
         #: Share of the time left that the stage may take: the guide's legs are driven
@@ -326,11 +330,13 @@ class HolonomicStage:
             return ompl_path(*args, **kwargs)
         if self.planner == "reeds-shepp":
             from nilpotent.planning.guide import guide_path
+            from nilpotent.planning.trailer_guide import TrailerGeometry, trailer_guide_path
 
+            find = trailer_guide_path if isinstance(self.car, TrailerGeometry) else guide_path
             # the plain validity, not plan_global's extra clearance (room for steered
             # pieces): the guide's legs are driven exactly, and the clearance kept the
             # paths out of the parking slot's corners (1.3-1.5x Reeds-Shepp RRT*)
-            guide = guide_path(*args, **{**kwargs, "valid": None})
+            guide = find(*args, **{**kwargs, "valid": None})
             self.found.append(guide)
             return [np.array(p) for p in guide.points]
         best = optimal_path(*args, **kwargs, improve_seconds=IMPROVE_FRACTION * args[3],
@@ -346,7 +352,10 @@ class HolonomicStage:
         if self.car is None:
             return None
         from nilpotent.planning.guide import exact_piece
+        from nilpotent.planning.trailer_guide import TrailerGeometry, trailer_exact_piece
 
+        if isinstance(self.car, TrailerGeometry):
+            return trailer_exact_piece(checker, x, prev, w, tol, points, self.car)
         return exact_piece(checker, x, prev, w, tol, points, self.car.wheelbase)
 
     def fields(self) -> dict[str, Any]:
