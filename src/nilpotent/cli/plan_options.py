@@ -72,8 +72,9 @@ PlannerOpt = Annotated[
     typer.Option("--planner", metavar="NAME",
                  help="Holonomic stage: rrtconnect (OMPL RRTConnect, shortest Euclidean path; "
                       "default), rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
-                      "anytime) or reeds-shepp (car-like models: an OMPL Reeds-Shepp path "
-                      "lifted to the car's configurations)."),
+                      "anytime) or reeds-shepp (car-like models, and car-trailers:1 through "
+                      "its trailer: an OMPL Reeds-Shepp path lifted to the model's "
+                      "configurations)."),
 ]
 
 SeedOpt = Annotated[
