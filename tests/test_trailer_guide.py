@@ -146,3 +146,30 @@ def test_parking_with_the_trailer_guide():
     along = d[:, 0] * np.cos(q[:-1, 2]) + d[:, 1] * np.sin(q[:-1, 2])
     signs = np.sign(along[np.abs(along) > 1e-9])
     assert int(np.sum(signs[1:] != signs[:-1])) <= 10
+
+
+def test_an_end_with_no_turn_at_rest_is_refused_at_once():
+    """A goal in a tunnel 0.8 wide (the parking slot with a roof): the car cannot turn at
+    rest to either hitch angle +-1.2 there (checked on the model's own configurations), so
+    no guide curve can end there; the guide says so at once instead of searching."""
+    import time
+
+    from nilpotent.errors import PlanningError
+    from nilpotent.planning.trailer_guide import trailer_guide_path
+    from nilpotent.planning.world import world_from_dict
+
+    world = world_from_dict({
+        "name": "tunnel", "bounds": {"x": [-4.0, 6.0], "y": [-1.2, 2.5]},
+        "obstacles": [
+            {"polygon": [[-4.0, -1.2], [6.0, -1.2], [6.0, -1.0], [-4.0, -1.0]]},
+            {"polygon": [[-0.5, -0.2], [3.5, -0.2], [3.5, 0.3], [-0.5, 0.3]]},
+        ]})
+    checker = Checker(SYSTEM, world)
+    start, goal = np.array([-2.5, 1.0, 0.1, 0.1]), np.array([1.7, -0.6, 0.0, 0.0])
+    assert checker.why_invalid(goal) == ""
+    for phi in (1.2, -1.2):
+        assert not checker.valid(np.array([[1.7, -0.6, phi, 0.0]]))[0]
+    t = time.perf_counter()
+    with pytest.raises(PlanningError, match="goal's trailer pose admits no turn"):
+        trailer_guide_path(checker, start, goal, 60.0, seed=0)
+    assert time.perf_counter() - t < 10.0

@@ -9,7 +9,8 @@ Math. 145(2), 1990): this stage plans with them and hands the steering pieces
 the car can follow exactly.
 
 1. **Search** (:func:`guide_path`): OMPL RRT* (path length; after its first path it
-   improves it for :data:`IMPROVE_FRACTION` of its time, at most :data:`IMPROVE_SECONDS`)
+   improves it for :data:`IMPROVE_FRACTION` of its time, at most :data:`IMPROVE_SECONDS`;
+   a tree with no path after :data:`RESTART_SECONDS` is cleared and grown anew)
    in ``ob.ReedsSheppStateSpace(r_g)``, ``r_g = L / tan φ_g`` with
    ``φ_g = φ_max −`` :data:`PHI_MARGIN` (0.56 % above the car's least turning radius),
    bounds from the world (else the box of
@@ -100,6 +101,13 @@ PHI_STEP = 0.1
 #: improvement, within 1.02 × Reeds–Shepp RRT* run for the whole 30 s on 8 pairs).
 IMPROVE_FRACTION = 0.5
 IMPROVE_SECONDS = 15.0
+#: Seconds of RRT* without a first path after which its tree is cleared and grown anew
+#: (:func:`~nilpotent.planning.holonomic_path.anytime_solve`): with the trailer guide's turns
+#: at rest, the parking slot is a narrow passage and a tree can stall there (the
+#: ``parking`` goal (1.7, -0.55) from (-2.5, 1, 0.1, 0.1): seeds 1-3 found a first path
+#: within about 11 s, seed 0 none in 84 s, its goal's neighbours retrying the same failing
+#: curves; with the restart, seed 0 found one at 20 s, on its second tree).
+RESTART_SECONDS = 15.0
 #: Largest step (length units) at which OMPL checks the poses along a motion.
 CHECK_STEP = 0.02
 #: Extra clearance of the guide's poses (without a validity check given): OMPL's check
@@ -286,7 +294,7 @@ def guide_path(
     improve = min(IMPROVE_FRACTION * seconds, IMPROVE_SECONDS)
     try:
         history = anytime_solve(planner, pdef, seconds, improve,
-                                f"a Reeds-Shepp path (radius {radius:.3g})")
+                                f"a Reeds-Shepp path (radius {radius:.3g})", RESTART_SECONDS)
         solution: Any = pdef.getSolutionPath()  # a geometric path (the stubs say Path)
         path: Any = og.PathGeometric(solution)
         og.PathSimplifier(si).simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))

@@ -178,10 +178,13 @@ def ompl_path(
 
 
 def anytime_solve(planner: Any, pdef: Any, seconds: float, improve: float,
-                  what: str) -> list[tuple[float, float]]:
+                  what: str, restart: float | None = None) -> list[tuple[float, float]]:
     """Run an OMPL optimising planner in slices of :data:`SLICE_SECONDS` until ``seconds``,
     or ``improve`` seconds after its first exact solution; ``[(seconds, best cost)]`` after
-    each slice with a solution (the budget is checked before each slice).
+    each slice with a solution (the budget is checked before each slice).  ``restart``:
+    the tree is cleared (``planner.clear()``: a new tree, from the RNG's next numbers) after
+    each ``restart`` seconds without an exact solution (a tree can stall at a narrow goal,
+    retrying the same failing edges from the same nearest vertices).
 
     Raises
     ------
@@ -191,11 +194,17 @@ def anytime_solve(planner: Any, pdef: Any, seconds: float, improve: float,
     t0 = time.perf_counter()
     history: list[tuple[float, float]] = []
     first: float | None = None
+    tree = t0  # when the current tree was started
     while True:
-        spent = time.perf_counter() - t0
+        now = time.perf_counter()
+        spent = now - t0
         left = seconds - spent
         if first is not None:
             left = min(left, first + improve - spent)
+        elif restart is not None and now - tree >= restart and left >= SLICE_SECONDS:
+            planner.clear()
+            pdef.clearSolutionPaths()
+            tree = now
         if left <= 0:
             break
         budget.check(f"looking for {what} with OMPL RRT*")

@@ -42,7 +42,7 @@ import sympy as sp
 
 from nilpotent.core.model.outline import Limits
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.errors import OptionError
+from nilpotent.errors import OptionError, PlanningError
 from nilpotent.planning.guide import (
     GUIDE_MARGIN,
     PHI_MARGIN,
@@ -210,7 +210,8 @@ def trailer_guide_path(
     OptionError
         The model is not a car with one trailer.
     PlanningError
-        As :func:`~nilpotent.planning.guide.guide_path`.
+        As :func:`~nilpotent.planning.guide.guide_path`; or, at once, the start's or the
+        goal's trailer pose admits no turn of the car at rest to ``+φ_g`` nor to ``−φ_g``.
     """
     del valid, held
     geometry = trailer_geometry(checker.system, checker)
@@ -221,6 +222,18 @@ def trailer_guide_path(
     margin = GUIDE_MARGIN if bool(np.all(checker.valid(from_car(ends, d), GUIDE_MARGIN))) \
         else 0.0
     check = functools.partial(_valid, checker, d, margin)
+    for what, s in (("start", s0), ("goal", sg)):
+        # every curve starts and ends with a turn at rest from / to φ = 0 (_validator):
+        # with neither turn admissible, only a curve ending in a straight leg exactly on
+        # the pose's axis reaches it, and OMPL would search the whole time
+        k = max(4, math.ceil(phi_g / SWEEP_STEP) + 1)  # not 3 rows: _valid's pose check
+        turns = [np.array([[*s[:3], p] for p in np.linspace(0.0, sign * phi_g, k)])
+                 for sign in (1.0, -1.0)]
+        if not any(bool(np.all(check(t))) for t in turns):
+            raise PlanningError(
+                f"the {what}'s trailer pose admits no turn of the car at rest to the hitch "
+                f"angle +-{phi_g:.3g} of the trailer guide (its body would leave the free "
+                "space): the guide's curves cannot start or end there")
     motion = functools.partial(_validator, check, phi_g, geometry.radius)
     found = guide_path(_stand_in(checker, geometry), s0, sg, seconds, seed, resolution,
                        valid=check, motion=motion)
@@ -246,7 +259,6 @@ def _validator(check: Callable[[np.ndarray], np.ndarray], phi_g: float, radius: 
     path, from one curve's last angle to the next one's first, is covered)."""
     from ompl import base as ob
 
-    from nilpotent.errors import PlanningError
     from nilpotent.planning.guide import _edge_poses, edge_legs
 
     class Validator(ob.MotionValidator):  # type: ignore[misc]
