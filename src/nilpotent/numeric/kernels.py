@@ -169,7 +169,11 @@ def _integrate_one(x0, dur, om, a, bc, bs, ts, adaptive, nfixed, rtol, atol,
             status = 4
             break
         if adaptive:
-            h = _initial_step(x, K[0], d, w, aa, cc, ss, rtol, atol, xs, K[1], u)
+            # the guess may fall below min_step where a coordinate crosses 0 (its scale
+            # atol + rtol|x| is tiny): start at min_step, and stop only if the error
+            # control itself shrinks the step below it (scipy has no such floor at all)
+            h = max(_initial_step(x, K[0], d, w, aa, cc, ss, rtol, atol, xs, K[1], u),
+                    min_step)
         else:
             h = d / nfixed
         just_rejected = False
