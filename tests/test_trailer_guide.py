@@ -195,3 +195,20 @@ def test_a_straight_drive_in_a_corridor_is_not_refused():
     assert np.linalg.norm(q[-1] - np.array(goal)) <= 1e-5
     assert np.abs(q[:, 2] - q[:, 3]).max() <= 1e-9
     assert np.all(checker.measures(q)[0] > 0)
+
+
+def test_a_trailer_model_with_another_drive_is_refused_with_its_reason(tmp_path):
+    """A model file with the trailer's coordinates whose trailer is pushed ahead
+    (``-sin(θ0 − θ1)/d``): refused naming what differs from a car with one trailer, not
+    the car's coordinates."""
+    from nilpotent.core.model.modelfile import load_model_file
+
+    path = tmp_path / "ahead.toml"
+    path.write_text(
+        'coordinates = ["x", "y", "theta0", "theta1"]\n[parameters]\nd = 1.0\n'
+        '[[fields]]\nx = "cos(theta0)"\ny = "sin(theta0)"\n'
+        'theta1 = "-sin(theta0 - theta1)/d"\n[[fields]]\ntheta0 = 1\n'
+        '[relative_limits]\n"theta0 - theta1" = [-1.4, 1.4]\n')
+    with pytest.raises(OptionError, match=r"car-like.*first field other than"):
+        plan_global(load_model_file(path), (0, 0, 0, 0), (3, 1, 0, 0),
+                    planner="reeds-shepp", time_limit=600)
