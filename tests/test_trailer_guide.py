@@ -212,3 +212,19 @@ def test_a_trailer_model_with_another_drive_is_refused_with_its_reason(tmp_path)
     with pytest.raises(OptionError, match=r"car-like.*first field other than"):
         plan_global(load_model_file(path), (0, 0, 0, 0), (3, 1, 0, 0),
                     planner="reeds-shepp", time_limit=600)
+
+
+def test_a_hitch_limit_within_the_guide_margin_is_refused_naming_it(tmp_path):
+    """A hitch limit of 0.002 rad (below the guide's margin, so no hitch angle to drive
+    an arc at): the refusal states the lower bound too, not only ``< pi/2``."""
+    from nilpotent.core.model.modelfile import load_model_file
+
+    path = tmp_path / "stiff.toml"
+    path.write_text(
+        'coordinates = ["x", "y", "theta0", "theta1"]\n[parameters]\nd = 1.0\n'
+        '[[fields]]\nx = "cos(theta0)"\ny = "sin(theta0)"\n'
+        'theta1 = "sin(theta0 - theta1)/d"\n[[fields]]\ntheta0 = 1\n'
+        '[relative_limits]\n"theta0 - theta1" = [-0.002, 0.002]\n')
+    with pytest.raises(OptionError, match=r"0\.0025 < phi_max < pi/2"):
+        plan_global(load_model_file(path), (0, 0, 0, 0), (3, 1, 0, 0),
+                    planner="reeds-shepp", time_limit=600)

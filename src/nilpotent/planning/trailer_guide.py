@@ -123,7 +123,8 @@ def trailer_geometry(system: ControlSystem, checker: Checker) -> TrailerGeometry
     phi_max = min(-lo, hi)
     if not (PHI_MARGIN < phi_max < math.pi / 2):
         raise OptionError(
-            f"--planner reeds-shepp needs a hitch limit |theta0 - theta1| <= phi_max < pi/2; "
+            f"--planner reeds-shepp needs a hitch limit |theta0 - theta1| <= phi_max with "
+            f"{PHI_MARGIN:g} < phi_max < pi/2; "
             f"model {system.name} has theta0 - theta1 in [{lo:g}, {hi:g}]")
     return TrailerGeometry(hitch, phi_max)
 
