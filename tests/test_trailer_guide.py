@@ -173,3 +173,58 @@ def test_an_end_with_no_turn_at_rest_is_refused_at_once():
     with pytest.raises(PlanningError, match="goal's trailer pose admits no turn"):
         trailer_guide_path(checker, start, goal, 60.0, seed=0)
     assert time.perf_counter() - t < 10.0
+
+
+def test_a_straight_drive_in_a_corridor_is_not_refused():
+    """A corridor 1 wide: the car cannot turn at rest to +-1.2 anywhere in it, but the goal
+    lies straight ahead on the trailer's axis, so one straight leg joins the two ends (the
+    default planner finds it too); the guide must not refuse it at once, and its path
+    replays by scipy to the goal with the hitch angle 0 throughout."""
+    from nilpotent.planning.world import world_from_dict
+
+    world = world_from_dict({"name": "corridor",
+                             "bounds": {"x": [-3.0, 6.0], "y": [-0.5, 0.5]}})
+    checker = Checker(SYSTEM, world)
+    for phi in (1.2, -1.2):
+        assert not checker.valid(np.array([[0.0, 0.0, phi, 0.0]]))[0]
+    start, goal = (0.0, 0.0, 0.0, 0.0), (3.0, 0.0, 0.0, 0.0)
+    out = plan_global(SYSTEM, start, goal, 1e-6, world=world, time_limit=60,
+                      planner="reeds-shepp", seed=0)
+    assert out.planner == "reeds-shepp"
+    q = resimulate(SYSTEM, start, _json(out.plan), samples=50)
+    assert np.linalg.norm(q[-1] - np.array(goal)) <= 1e-5
+    assert np.abs(q[:, 2] - q[:, 3]).max() <= 1e-9
+    assert np.all(checker.measures(q)[0] > 0)
+
+
+def test_a_trailer_model_with_another_drive_is_refused_with_its_reason(tmp_path):
+    """A model file with the trailer's coordinates whose trailer is pushed ahead
+    (``-sin(θ0 − θ1)/d``): refused naming what differs from a car with one trailer, not
+    the car's coordinates."""
+    from nilpotent.core.model.modelfile import load_model_file
+
+    path = tmp_path / "ahead.toml"
+    path.write_text(
+        'coordinates = ["x", "y", "theta0", "theta1"]\n[parameters]\nd = 1.0\n'
+        '[[fields]]\nx = "cos(theta0)"\ny = "sin(theta0)"\n'
+        'theta1 = "-sin(theta0 - theta1)/d"\n[[fields]]\ntheta0 = 1\n'
+        '[relative_limits]\n"theta0 - theta1" = [-1.4, 1.4]\n')
+    with pytest.raises(OptionError, match=r"car-like.*first field other than"):
+        plan_global(load_model_file(path), (0, 0, 0, 0), (3, 1, 0, 0),
+                    planner="reeds-shepp", time_limit=600)
+
+
+def test_a_hitch_limit_within_the_guide_margin_is_refused_naming_it(tmp_path):
+    """A hitch limit of 0.002 rad (below the guide's margin, so no hitch angle to drive
+    an arc at): the refusal states the lower bound too, not only ``< pi/2``."""
+    from nilpotent.core.model.modelfile import load_model_file
+
+    path = tmp_path / "stiff.toml"
+    path.write_text(
+        'coordinates = ["x", "y", "theta0", "theta1"]\n[parameters]\nd = 1.0\n'
+        '[[fields]]\nx = "cos(theta0)"\ny = "sin(theta0)"\n'
+        'theta1 = "sin(theta0 - theta1)/d"\n[[fields]]\ntheta0 = 1\n'
+        '[relative_limits]\n"theta0 - theta1" = [-0.002, 0.002]\n')
+    with pytest.raises(OptionError, match=r"0\.0025 < phi_max < pi/2"):
+        plan_global(load_model_file(path), (0, 0, 0, 0), (3, 1, 0, 0),
+                    planner="reeds-shepp", time_limit=600)

@@ -154,7 +154,8 @@ def car_geometry(system: ControlSystem, checker: Checker) -> CarGeometry:
         raise OptionError(
             f"--planner reeds-shepp needs a car-like model (coordinates x, y, theta, phi; "
             f"fields cos(theta) d/dx + sin(theta) d/dy + tan(phi)/L d/dtheta and d/dphi, e.g. "
-            f"the built-in car): model {system.name} {why}")
+            f"the built-in car; or a car with one trailer, e.g. car-trailers:1): "
+            f"model {system.name} {why}")
     fields = system.specialized_fields
     theta, phi = system.coordinates[2], system.coordinates[3]
     wheelbase = float(sp.simplify(sp.tan(phi) / fields[0][2]).subs(theta, 0))

@@ -311,9 +311,11 @@ class HolonomicStage:
         self.car: Any = None  # the guide's CarGeometry, once (refuses a model not car-like)
         if planner == "reeds-shepp" and checker is not None:
             from nilpotent.planning.guide import car_geometry
-            from nilpotent.planning.trailer_guide import is_trailer_like, trailer_geometry
+            from nilpotent.planning.trailer_guide import TRAILER_COORDINATES, trailer_geometry
 
-            if is_trailer_like(checker.system):  # the trailer as a car (trailer_guide)
+            # the trailer as a car (trailer_guide); a model with a trailer's coordinates
+            # that is not one is refused with the trailer's reason, not the car's
+            if checker.system.coordinate_names == TRAILER_COORDINATES:
                 self.car = trailer_geometry(checker.system, checker)
             else:
                 self.car = car_geometry(checker.system, checker)

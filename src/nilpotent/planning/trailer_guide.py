@@ -123,7 +123,8 @@ def trailer_geometry(system: ControlSystem, checker: Checker) -> TrailerGeometry
     phi_max = min(-lo, hi)
     if not (PHI_MARGIN < phi_max < math.pi / 2):
         raise OptionError(
-            f"--planner reeds-shepp needs a hitch limit |theta0 - theta1| <= phi_max < pi/2; "
+            f"--planner reeds-shepp needs a hitch limit |theta0 - theta1| <= phi_max with "
+            f"{PHI_MARGIN:g} < phi_max < pi/2; "
             f"model {system.name} has theta0 - theta1 in [{lo:g}, {hi:g}]")
     return TrailerGeometry(hitch, phi_max)
 
@@ -211,7 +212,8 @@ def trailer_guide_path(
         The model is not a car with one trailer.
     PlanningError
         As :func:`~nilpotent.planning.guide.guide_path`; or, at once, the start's or the
-        goal's trailer pose admits no turn of the car at rest to ``+φ_g`` nor to ``−φ_g``.
+        goal's trailer pose admits no turn of the car at rest to ``+φ_g`` nor to ``−φ_g``
+        (unless one straight leg joins the start to the goal: :func:`_straight_between`).
     """
     del valid, held
     geometry = trailer_geometry(checker.system, checker)
@@ -229,7 +231,8 @@ def trailer_guide_path(
         k = max(4, math.ceil(phi_g / SWEEP_STEP) + 1)  # not 3 rows: _valid's pose check
         turns = [np.array([[*s[:3], p] for p in np.linspace(0.0, sign * phi_g, k)])
                  for sign in (1.0, -1.0)]
-        if not any(bool(np.all(check(t))) for t in turns):
+        if not any(bool(np.all(check(t))) for t in turns) \
+                and not _straight_between(check, s0, sg):
             raise PlanningError(
                 f"the {what}'s trailer pose admits no turn of the car at rest to the hitch "
                 f"angle +-{phi_g:.3g} of the trailer guide (its body would leave the free "
@@ -241,6 +244,30 @@ def trailer_guide_path(
     points[0], points[-1] = np.asarray(x0, dtype=float), np.asarray(xg, dtype=float)
     return GuidePath(tuple(tuple(float(c) for c in p) for p in points), found.length,
                      found.length_history, found.radius)
+
+
+def _straight_between(check: Callable[[np.ndarray], np.ndarray], s0: np.ndarray,
+                      sg: np.ndarray) -> bool:
+    """Whether one straight leg of the trailer joins the start ``s0`` to the goal ``sg``
+    (car coordinates: same heading, the goal on the start's axis) with the turns at rest
+    from the start's hitch angle to ``0`` and from ``0`` to the goal's admissible: the one
+    curve that needs no turn at rest to ``±φ_g`` at an end (a narrow corridor)."""
+    d = np.asarray(sg[:2], dtype=float) - np.asarray(s0[:2], dtype=float)
+    th = float(s0[2])
+    along = float(d[0] * math.cos(th) + d[1] * math.sin(th))
+    across = float(-d[0] * math.sin(th) + d[1] * math.cos(th))
+    if abs(float(sg[2]) - th) > 1e-9 or abs(across) > 1e-9:
+        return False
+
+    def sweep(pose: np.ndarray, a: float, b: float) -> list[tuple[float, ...]]:
+        k = max(1, math.ceil(abs(b - a) / SWEEP_STEP))
+        return [(*pose, float(p)) for p in np.linspace(a, b, k + 1)]
+
+    rows = sweep(np.asarray(s0[:3], dtype=float), float(s0[3]), 0.0)
+    rows += [(*p[:3], 0.0) for p in _motion_configs(s0[:3], [Leg(0.0, along)], 0.0, 1.0)]
+    rows += sweep(np.asarray(sg[:3], dtype=float), 0.0, float(sg[3]))
+    rows = rows + rows[:1] if len(rows) == 3 else rows  # not 3 rows: _valid's pose check
+    return bool(np.all(check(np.array(rows))))
 
 
 #: Steps of the motion check along a Reeds-Shepp curve (arc length of the trailer) and of
