@@ -63,7 +63,8 @@ from nilpotent.planning.verify import Checker
 
 __all__ = [
     "CAR_COORDINATES", "PHI_MARGIN", "CarGeometry", "GuidePath", "Leg", "car_geometry",
-    "edge_legs", "exact_piece", "guide_path", "leg_end", "lift", "lift_legs", "merge_legs",
+    "edge_legs", "edge_poses", "exact_piece", "guide_path", "leg_end", "lift", "lift_legs",
+    "merge_legs",
 ]
 
 #: Coordinates of a car-like model, in order.
@@ -303,7 +304,7 @@ def guide_path(
         vertices = [path.getState(i) for i in range(path.getStateCount())]
         try:
             legs = [leg for a, b in itertools.pairwise(vertices)
-                    for leg in edge_legs(_edge_poses(space, a, b), radius,
+                    for leg in edge_legs(edge_poses(space, a, b), radius,
                                          float(space.distance(a, b)))]
         except PlanningError:
             legs = None  # a curve not solved: its dense samples lifted instead
@@ -327,7 +328,7 @@ def guide_path(
                      tuple(history), radius)
 
 
-def _edge_poses(space: Any, a: Any, b: Any) -> np.ndarray:
+def edge_poses(space: Any, a: Any, b: Any) -> np.ndarray:
     """Dense samples ``(N, 3)`` of the Reeds–Shepp curve from state ``a`` to ``b``, every
     :data:`LEG_SAMPLE_STEP` of arc length at most."""
     n = max(2, math.ceil(float(space.distance(a, b)) / LEG_SAMPLE_STEP) + 1)

@@ -286,12 +286,12 @@ def _validator(check: Callable[[np.ndarray], np.ndarray], phi_g: float, radius: 
     path, from one curve's last angle to the next one's first, is covered)."""
     from ompl import base as ob
 
-    from nilpotent.planning.guide import _edge_poses, edge_legs
+    from nilpotent.planning.guide import edge_poses, edge_legs
 
     class Validator(ob.MotionValidator):  # type: ignore[misc]
         def checkMotion(self, a: Any, b: Any, *rest: Any) -> bool:
             distance = float(space.distance(a, b))
-            poses = _edge_poses(space, a, b)
+            poses = edge_poses(space, a, b)
             try:
                 legs = edge_legs(poses, radius, distance)
             except PlanningError:
