@@ -286,7 +286,7 @@ def _validator(check: Callable[[np.ndarray], np.ndarray], phi_g: float, radius: 
     path, from one curve's last angle to the next one's first, is covered)."""
     from ompl import base as ob
 
-    from nilpotent.planning.guide import edge_poses, edge_legs
+    from nilpotent.planning.guide import edge_legs, edge_poses
 
     class Validator(ob.MotionValidator):  # type: ignore[misc]
         def checkMotion(self, a: Any, b: Any, *rest: Any) -> bool:
