@@ -8,6 +8,7 @@ another (the checker's self-clearance) and the world at every dense sample.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -20,8 +21,8 @@ from nilpotent.planning.global_planner import plan_global
 from nilpotent.planning.guide import Leg
 from nilpotent.planning.trailer_guide import (
     TRAILER_PHI,
-    _motion_configs,
     from_car,
+    motion_pieces,
     to_car,
     trailer_exact_piece,
     trailer_geometry,
@@ -94,24 +95,32 @@ def test_turn_at_rest_leaves_the_trailer():
     assert q[-1, 2] == pytest.approx(1.2, abs=1e-9)
 
 
-def test_motion_configs_of_an_arc_then_a_straight_leg():
-    """An arc of radius r (left, backwards) then a straight leg: the arc's poses at phi_g on
-    the circle, the straight's at 0 on its line, the turns at rest (from 0, between the legs,
-    back to 0) in steps of at most 0.05, nothing else."""
-    r, phi_g = 0.5, 1.1
-    rows = _motion_configs(np.zeros(3), [Leg(1 / r, -0.3), Leg(0.0, 0.4)], phi_g, r)
-    phis = rows[:, 3]
-    assert np.all(np.abs(np.diff(phis)) <= 0.05 + 1e-12)
-    assert phis[0] == 0.0 and phis[-1] == 0.0 and phis.max() == pytest.approx(phi_g)
-    on_arc = rows[phis == phi_g]
-    assert np.allclose(np.hypot(on_arc[:, 0], on_arc[:, 1] - r), r)
-    assert on_arc[:, 2].min() == pytest.approx(-0.6)  # theta = kappa * s
-    moving = np.linalg.norm(np.diff(rows[:, :3], axis=0), axis=1) > 1e-12
-    assert np.all(np.abs(np.diff(phis))[moving] == 0.0)  # phi changes only at rest
+def test_motion_pieces_of_an_arc_then_a_straight_leg():
+    """An arc of radius r (left, backwards) then a straight leg, from the hitch angle 0.3 to
+    -0.4: the arc's poses at atan(d / r) on the circle, the straight's at 0 on its line, the
+    turns at rest (0.3 to the arc's angle, to 0, to -0.4) in steps of at most 0.05 with the
+    pose fixed, consecutive pieces sharing their ends, nothing else."""
+    r, d = 0.5, 1.1
+    phi_g = math.atan(d / r)
+    pieces = motion_pieces(np.zeros(3), [Leg(1 / r, -0.3), Leg(0.0, 0.4)], 0.3, -0.4, d,
+                           step=0.02, sweep=0.05)
+    assert len(pieces) == 5
+    for a, b in itertools.pairwise(pieces):
+        assert np.array_equal(a[-1], b[0])
+    turns, arc, straight = pieces[0::2], pieces[1], pieces[3]
+    assert [(t[0, 3], t[-1, 3]) for t in turns] == [(0.3, phi_g), (phi_g, 0.0), (0.0, -0.4)]
+    for t in turns:
+        assert np.all(np.abs(np.diff(t[:, 3])) <= 0.05 + 1e-12)
+        assert np.all(t[:, :3] == t[0, :3])
+    assert np.all(arc[:, 3] == phi_g) and np.all(straight[:, 3] == 0.0)
+    assert np.allclose(np.hypot(arc[:, 0], arc[:, 1] - r), r)
+    assert arc[-1, 2] == pytest.approx(-0.6)  # theta = kappa * s
+    assert np.all(np.linalg.norm(np.diff(arc[:, :2], axis=0), axis=1) <= 0.02)
     end = np.array([r * math.sin(-0.6), r * (1 - math.cos(-0.6)), -0.6])
-    line = rows[(phis == 0.0) & (np.abs(rows[:, 2] + 0.6) < 1e-12)]
-    off = line[:, :2] - end[:2]
+    assert np.allclose(arc[-1, :3], end)
+    off = straight[:, :2] - end[:2]
     assert np.allclose(off[:, 0] * math.sin(-0.6) - off[:, 1] * math.cos(-0.6), 0.0)
+    assert np.hypot(*(straight[-1, :2] - end[:2])) == pytest.approx(0.4)
 
 
 def test_two_trailers_refused():

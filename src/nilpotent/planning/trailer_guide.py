@@ -31,7 +31,9 @@ be held on a Reeds–Shepp arc entered at rest).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -45,17 +47,24 @@ from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PlanningError
 from nilpotent.planning.guide import (
     GUIDE_MARGIN,
+    IMPROVE_FRACTION,
+    IMPROVE_SECONDS,
     PHI_MARGIN,
+    RESTART_SECONDS,
     GuidePath,
     Leg,
-    guide_path,
+    edge_legs,
+    edge_poses,
     leg_end,
+    lift_legs,
+    merge_legs,
 )
+from nilpotent.planning.holonomic_path import SIMPLIFY_SECONDS, anytime_solve, box
 from nilpotent.planning.verify import Checker
 
 __all__ = [
-    "TRAILER_COORDINATES", "TRAILER_PHI", "TrailerGeometry", "from_car", "to_car",
-    "trailer_exact_piece", "trailer_geometry", "trailer_guide_path",
+    "TRAILER_COORDINATES", "TRAILER_PHI", "TrailerGeometry", "from_car", "motion_pieces",
+    "to_car", "trailer_exact_piece", "trailer_geometry", "trailer_guide_path",
 ]
 
 #: Coordinates of a one-trailer model, in order.
@@ -171,8 +180,9 @@ def from_car(s: np.ndarray, hitch: float) -> np.ndarray:
 
 def _stand_in(checker: Checker, geometry: TrailerGeometry) -> Checker:
     """A checker of the built-in car with wheelbase ``d`` and steering limit
-    ``φ_g + PHI_MARGIN``: what :func:`~nilpotent.planning.guide.guide_path` reads (the
-    geometry, the world's bounds); its validity is never used."""
+    ``φ_g + PHI_MARGIN``, in the world of ``checker``: what
+    :func:`~nilpotent.planning.holonomic_path.box` reads (the coordinates' names, the
+    world's bounds) for the trailer's axle; its validity is never used."""
     from nilpotent.models import get_model
 
     car = get_model("car", {"L": sp.Float(geometry.hitch), "rmin": sp.Float(geometry.radius)})
@@ -180,12 +190,60 @@ def _stand_in(checker: Checker, geometry: TrailerGeometry) -> Checker:
     return Checker(car, checker.world, Limits((("phi", -limit, limit),)))
 
 
-def _valid(checker: Checker, hitch: float, margin: float, s: np.ndarray) -> np.ndarray:
-    """The validity of configurations ``s (N, 4)`` in the trailer's car coordinates; for the
-    guide's pose check (``N = 3``: one pose at the hitch angles ``−φ_g, 0, φ_g``) that of
-    ``φ = 0`` alone, the angles taken on a curve being checked with it (:func:`_validator`)."""
-    ok = checker.valid(from_car(s, hitch), extra_clearance=margin)
-    return np.full(3, bool(ok[1])) if len(ok) == 3 else ok
+#: Steps of the validator's motion check (:func:`motion_pieces`): arc length of the trailer
+#: between the poses of a leg, hitch angle (rad) between the configurations of a turn at
+#: rest.  Each piece is checked with the cover of :meth:`~nilpotent.planning.verify.Checker.
+#: valid_motion` (half the largest step of an outline point) on top of the guide's margin.
+MOTION_STEP = 0.01
+SWEEP_STEP = 0.02
+#: Steps of the final check of the whole lifted path, as fine as the exact pieces'
+#: (:func:`trailer_exact_piece`: :data:`EXACT_STEP` of the trailer's arc, the turns at rest
+#: in steps of ``PHI_MARGIN``).
+FINAL_SWEEP_STEP = PHI_MARGIN
+#: Weight of the hitch angle's change (length units per rad) in the distance between two
+#: OMPL states (Reeds–Shepp length of the trailer ``+ PHI_WEIGHT |Δφ|``).
+PHI_WEIGHT = 0.1
+
+
+def motion_pieces(pose: Sequence[float] | np.ndarray, legs: Sequence[Leg], phi_from: float,
+                  phi_to: float, hitch: float, step: float = MOTION_STEP,
+                  sweep: float = SWEEP_STEP) -> list[np.ndarray]:
+    """The configurations ``(x1, y1, θ1, φ)`` driven along ``legs`` from the trailer's
+    ``pose (3,)`` with the hitch angle ``phi_from``, ending with ``phi_to``: before each leg
+    a turn at rest from the hitch angle held to the leg's ``atan(d κ)`` (``d = hitch``; the
+    angle :func:`~nilpotent.planning.guide.lift_legs` gives it), the leg's poses at that
+    angle (closed form), and a turn at rest to ``phi_to`` after the last one.
+
+    Returns the pieces, each ``(N_i, 4)``: a turn at rest sampled every ``sweep`` of ``φ``
+    at most, a leg every ``step`` of arc length of the trailer at most, both ends included
+    (consecutive pieces share their ends); a turn by no angle is left out; with no leg and
+    no turn, one piece of the one configuration.
+    """
+    pieces: list[np.ndarray] = []
+    here = np.asarray(pose, dtype=float)[:3]
+    phi = float(phi_from)
+
+    def turn(to: float) -> None:
+        if to != phi:
+            k = max(1, math.ceil(abs(to - phi) / sweep))
+            pieces.append(np.array([(*here, float(p)) for p in np.linspace(phi, to, k + 1)]))
+
+    for leg in legs:
+        new = math.atan(hitch * leg.kappa)
+        turn(new)
+        phi = new
+        k = max(1, math.ceil(abs(leg.length) / step))
+        pieces.append(np.array([(*leg_end(here, leg.kappa, leg.length * j / k), phi)
+                                for j in range(k + 1)]))
+        here = leg_end(here, leg.kappa, leg.length)
+    turn(float(phi_to))
+    return pieces or [np.array([(*here, phi)])]
+
+
+def _admitted(checker: Checker, hitch: float, pieces: Sequence[np.ndarray]) -> bool:
+    """Whether every piece of :func:`motion_pieces` is admissible under ``checker`` with the
+    cover of its steps (:meth:`~nilpotent.planning.verify.Checker.valid_motion`)."""
+    return all(checker.valid_motion(from_car(p, hitch)) for p in pieces)
 
 
 def trailer_guide_path(
@@ -201,53 +259,157 @@ def trailer_guide_path(
     """The Reeds–Shepp guide of the trailer from ``x0`` to ``xg`` (module doc), its points
     in the model's coordinates.
 
-    Parameters as :func:`~nilpotent.planning.guide.guide_path`; ``valid`` and ``held`` are
-    ignored (the checker's validity with the guide's margin, none when the start or the
-    goal lacks it, at the hitch angle 0; each curve with the hitch angles of its legs and
-    the turns at rest between them: :func:`_validator`).
+    Parameters as :func:`~nilpotent.planning.guide.guide_path` (``seconds``: the search's
+    budget, RRT* improving its first path for ``min(IMPROVE_FRACTION seconds,
+    IMPROVE_SECONDS)``); ``resolution``, ``valid`` and ``held`` are ignored (the checker's
+    validity with the guide's margin, none when the start or the goal lacks it; each curve
+    checked as :func:`_validator`, the whole path as :func:`_lifted`).
 
     Raises
     ------
     OptionError
         The model is not a car with one trailer.
     PlanningError
-        As :func:`~nilpotent.planning.guide.guide_path`; or, at once, the start's or the
-        goal's trailer pose admits no turn of the car at rest to ``+φ_g`` nor to ``−φ_g``
-        (unless one straight leg joins the start to the goal: :func:`_straight_between`).
+        No path within ``seconds``; a path turning the heading by another multiple of
+        ``2π`` than the goal asks; or, at once, the start's or the goal's trailer pose
+        admits no turn of the car at rest to ``+φ_g`` nor to ``−φ_g`` (unless one straight
+        leg joins the start to the goal: :func:`_straight_between`).
     """
-    del valid, held
+    del resolution, valid, held
     geometry = trailer_geometry(checker.system, checker)
     d, phi_g = geometry.hitch, geometry.phi_guide
     s0, sg = to_car(x0, d), to_car(xg, d)
-    # the guide's margin unless the start or the goal lacks it (at the hitch angle 0)
-    ends = np.array([[*s[:3], 0.0] for s in (s0, sg)])
-    margin = GUIDE_MARGIN if bool(np.all(checker.valid(from_car(ends, d), GUIDE_MARGIN))) \
-        else 0.0
-    check = functools.partial(_valid, checker, d, margin)
+    # the guide's margin unless the start or the goal lacks it
+    ends = np.array([x0, xg], dtype=float)
+    margin = GUIDE_MARGIN if bool(np.all(checker.valid(ends, GUIDE_MARGIN))) else 0.0
+    kept = dataclasses.replace(checker, clearance=checker.clearance + margin)
+    admitted = functools.partial(_admitted, kept, d)
     for what, s in (("start", s0), ("goal", sg)):
-        # every curve starts and ends with a turn at rest from / to φ = 0 (_validator):
-        # with neither turn admissible, only a curve ending in a straight leg exactly on
-        # the pose's axis reaches it, and OMPL would search the whole time
-        k = max(4, math.ceil(phi_g / SWEEP_STEP) + 1)  # not 3 rows: _valid's pose check
-        turns = [np.array([[*s[:3], p] for p in np.linspace(0.0, sign * phi_g, k)])
-                 for sign in (1.0, -1.0)]
-        if not any(bool(np.all(check(t))) for t in turns) \
-                and not _straight_between(check, s0, sg):
+        # with neither turn admissible, only a straight leg exactly on the pose's axis
+        # leaves it, and OMPL would search the whole time
+        turns = [motion_pieces(s[:3], [], float(s[3]), sign * phi_g, d) for sign in (1, -1)]
+        if not any(admitted(t) for t in turns) and not _straight_between(admitted, d, s0, sg):
             raise PlanningError(
                 f"the {what}'s trailer pose admits no turn of the car at rest to the hitch "
                 f"angle +-{phi_g:.3g} of the trailer guide (its body would leave the free "
                 "space): the guide's curves cannot start or end there")
-    motion = functools.partial(_validator, check, phi_g, geometry.radius)
-    found = guide_path(_stand_in(checker, geometry), s0, sg, seconds, seed, resolution,
-                       valid=check, motion=motion)
-    points = [from_car(np.array(p), d) for p in found.points]
-    points[0], points[-1] = np.asarray(x0, dtype=float), np.asarray(xg, dtype=float)
-    return GuidePath(tuple(tuple(float(c) for c in p) for p in points), found.length,
-                     found.length_history, found.radius)
+    return _search(checker, kept, geometry, s0, sg, seconds, seed, (x0, xg))
 
 
-def _straight_between(check: Callable[[np.ndarray], np.ndarray], s0: np.ndarray,
-                      sg: np.ndarray) -> bool:
+def _search(checker: Checker, kept: Checker, geometry: TrailerGeometry, s0: np.ndarray,
+            sg: np.ndarray, seconds: float, seed: int | None,
+            ends: tuple[np.ndarray, np.ndarray]) -> GuidePath:
+    """OMPL RRT* in the trailer's Reeds–Shepp poses and hitch angles (module doc), its path
+    simplified and lifted (:func:`_lifted`)."""
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    d, radius = geometry.hitch, geometry.radius
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    if seed is not None:
+        ou.RNG.setSeed(int(seed) + 1)  # OMPL refuses seed 0
+    poses = ob.ReedsSheppStateSpace(radius)
+    lo, hi = box(_stand_in(checker, geometry), s0, sg)
+    bounds = ob.RealVectorBounds(2)
+    for axis in range(2):
+        bounds.setLow(axis, float(lo[axis]))
+        bounds.setHigh(axis, float(hi[axis]))
+    poses.setBounds(bounds)
+    angles = ob.RealVectorStateSpace(1)
+    reach = max(geometry.phi_guide, abs(float(s0[3])), abs(float(sg[3])))
+    angle_bounds = ob.RealVectorBounds(1)
+    angle_bounds.setLow(-reach)
+    angle_bounds.setHigh(reach)
+    angles.setBounds(angle_bounds)
+    space = ob.CompoundStateSpace()
+    space.addSubspace(poses, 1.0)
+    space.addSubspace(angles, PHI_WEIGHT)
+    si = ob.SpaceInformation(space)
+
+    def state_valid(state: Any) -> bool:
+        pose = state[0]
+        q = np.array([[pose.getX(), pose.getY(), pose.getYaw(), state[1][0]]])
+        return bool(kept.valid(from_car(q, d))[0])
+
+    si.setStateValidityChecker(state_valid)
+    si.setMotionValidator(_validator(kept, d, radius, poses, si))
+    si.setup()
+    start: Any = space.allocState()  # compound states (the stubs say State)
+    goal: Any = space.allocState()
+    for st, s in ((start, s0), (goal, sg)):
+        st[0].setX(float(s[0]))
+        st[0].setY(float(s[1]))
+        st[0].setYaw(float(s[2]))
+        st[1][0] = float(s[3])
+    pdef = ob.ProblemDefinition(si)
+    pdef.setStartAndGoalStates(start, goal)
+    pdef.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
+    planner = og.RRTstar(si)
+    planner.setProblemDefinition(pdef)
+    planner.setup()
+    improve = min(IMPROVE_FRACTION * seconds, IMPROVE_SECONDS)
+    try:
+        history = anytime_solve(planner, pdef, seconds, improve,
+                                f"a Reeds-Shepp path of the trailer (radius {radius:.3g})",
+                                RESTART_SECONDS)
+        raw: Any = og.PathGeometric(pdef.getSolutionPath())  # the stubs say Path
+        # shortcuts and smoothing cut curves at new vertices, whose turns at rest from the
+        # cut curve's hitch angle were never checked: that path is kept only if it passes
+        # the final check, else the one with fewer vertices (every curve checked)
+        simplifier = og.PathSimplifier(si)
+        reduced: Any = og.PathGeometric(raw)
+        simplifier.reduceVertices(reduced)
+        simplifier.collapseCloseVertices(reduced)
+        smooth: Any = og.PathGeometric(reduced)
+        simplifier.simplify(smooth, float(min(SIMPLIFY_SECONDS, seconds)))
+        lifted = None
+        for path in (smooth, reduced, raw):
+            vertices = [path.getState(i) for i in range(path.getStateCount())]
+            lifted = _lifted(checker, d, radius, poses, vertices, s0, sg)
+            if lifted is not None:
+                break
+    finally:
+        # break the references between Python objects and OMPL's (no leak at exit)
+        planner.clear()
+        pdef.clearSolutionPaths()
+        del planner, pdef
+    if lifted is None:
+        raise PlanningError("the trailer guide's path fails the final motion check "
+                            "(every curve passed the validator)")
+    points, length = lifted
+    out = [from_car(np.array(p), d) for p in points]
+    out[0], out[-1] = np.asarray(ends[0], dtype=float), np.asarray(ends[1], dtype=float)
+    return GuidePath(tuple(tuple(float(c) for c in p) for p in out), length,
+                     tuple(history), radius)
+
+
+def _lifted(checker: Checker, hitch: float, radius: float, space: Any,
+            vertices: Sequence[Any], s0: np.ndarray, sg: np.ndarray
+            ) -> tuple[list[np.ndarray], float] | None:
+    """The waypoints (car coordinates of the trailer) of :func:`~nilpotent.planning.guide.
+    lift_legs` along the curves between OMPL's ``vertices`` (compound states) from ``s0`` to
+    ``sg``, and the trailer's Reeds–Shepp length; ``None`` when a curve's legs are not
+    solved, the heading turns by another multiple of ``2π``, or the motion they drive (the
+    legs and the turns at rest between them, not through the vertices' own hitch angles)
+    fails ``checker``'s motion check in the steps of the exact pieces (:data:`EXACT_STEP`,
+    :data:`FINAL_SWEEP_STEP`): exactly what :func:`trailer_exact_piece` will drive."""
+    try:
+        legs = merge_legs([leg for a, b in itertools.pairwise(vertices)
+                           for leg in edge_legs(edge_poses(space, a[0], b[0]), radius,
+                                                float(space.distance(a[0], b[0])))])
+        points = lift_legs(legs, s0, sg, hitch)
+    except PlanningError:
+        return None
+    pieces = motion_pieces(s0[:3], legs, float(s0[3]), float(sg[3]), hitch, EXACT_STEP,
+                           FINAL_SWEEP_STEP)
+    if not _admitted(checker, hitch, pieces):
+        return None
+    return points, sum(abs(leg.length) for leg in legs)
+
+
+def _straight_between(admitted: Callable[[list[np.ndarray]], bool], hitch: float,
+                      s0: np.ndarray, sg: np.ndarray) -> bool:
     """Whether one straight leg of the trailer joins the start ``s0`` to the goal ``sg``
     (car coordinates: same heading, the goal on the start's axis) with the turns at rest
     from the start's hitch angle to ``0`` and from ``0`` to the goal's admissible: the one
@@ -258,72 +420,34 @@ def _straight_between(check: Callable[[np.ndarray], np.ndarray], s0: np.ndarray,
     across = float(-d[0] * math.sin(th) + d[1] * math.cos(th))
     if abs(float(sg[2]) - th) > 1e-9 or abs(across) > 1e-9:
         return False
-
-    def sweep(pose: np.ndarray, a: float, b: float) -> list[tuple[float, ...]]:
-        k = max(1, math.ceil(abs(b - a) / SWEEP_STEP))
-        return [(*pose, float(p)) for p in np.linspace(a, b, k + 1)]
-
-    rows = sweep(np.asarray(s0[:3], dtype=float), float(s0[3]), 0.0)
-    rows += [(*p[:3], 0.0) for p in _motion_configs(s0[:3], [Leg(0.0, along)], 0.0, 1.0)]
-    rows += sweep(np.asarray(sg[:3], dtype=float), 0.0, float(sg[3]))
-    rows = rows + rows[:1] if len(rows) == 3 else rows  # not 3 rows: _valid's pose check
-    return bool(np.all(check(np.array(rows))))
+    return admitted(motion_pieces(s0[:3], [Leg(0.0, along)], float(s0[3]), float(sg[3]),
+                                  hitch))
 
 
-#: Steps of the motion check along a Reeds-Shepp curve (arc length of the trailer) and of
-#: the hitch angle where the car turns at rest.
-MOTION_STEP = 0.02
-SWEEP_STEP = 0.05
-
-
-def _validator(check: Callable[[np.ndarray], np.ndarray], phi_g: float, radius: float,
-               space: Any, si: Any) -> Any:
-    """OMPL's motion validator of the trailer guide: the legs of the Reeds–Shepp curve
-    solved as the lifting will solve them (:func:`~nilpotent.planning.guide.edge_legs`; a
-    curve whose legs are not solved is invalid), each leg's poses every
-    :data:`MOTION_STEP` at its hitch angle, the car's turn at rest before each leg, and the
-    turns from and to ``φ = 0`` at the curve's ends (so that any turn at a vertex of the
-    path, from one curve's last angle to the next one's first, is covered)."""
+def _validator(checker: Checker, hitch: float, radius: float, poses: Any, si: Any) -> Any:
+    """OMPL's motion validator of the trailer guide, between two states ``(pose, φ)``: the
+    legs of the Reeds–Shepp curve between the poses solved as the lifting will solve them
+    (:func:`~nilpotent.planning.guide.edge_legs`; a curve whose legs are not solved is
+    invalid), driven from the first state's hitch angle to the second's
+    (:func:`motion_pieces`), every piece admissible under ``checker`` with its cover.  At a
+    vertex the lifted path turns at rest from the hitch angle of one curve's last leg
+    directly to the next one's first, a turn within the two that the validator checked
+    (through the vertex's own angle)."""
     from ompl import base as ob
-
-    from nilpotent.planning.guide import edge_legs, edge_poses
 
     class Validator(ob.MotionValidator):  # type: ignore[misc]
         def checkMotion(self, a: Any, b: Any, *rest: Any) -> bool:
-            distance = float(space.distance(a, b))
-            poses = edge_poses(space, a, b)
+            pa, pb = a[0], b[0]
             try:
-                legs = edge_legs(poses, radius, distance)
+                legs = edge_legs(edge_poses(poses, pa, pb), radius,
+                                 float(poses.distance(pa, pb)))
             except PlanningError:
                 return False
-            return bool(np.all(check(_motion_configs(poses[0], legs, phi_g, radius))))
+            pose = (pa.getX(), pa.getY(), pa.getYaw())
+            return _admitted(checker, hitch,
+                             motion_pieces(pose, legs, float(a[1][0]), float(b[1][0]), hitch))
 
     return Validator(si)
-
-
-def _motion_configs(pose: np.ndarray, legs: Sequence[Leg], phi_g: float,
-                    radius: float) -> np.ndarray:
-    """Configurations ``(x1, y1, θ1, φ)`` to check along the ``legs`` driven from ``pose``
-    (:func:`_validator`): turns at rest in steps of at most :data:`SWEEP_STEP`, each leg's
-    poses every :data:`MOTION_STEP` of arc length at ``φ = ±φ_g`` or ``0``."""
-    rows: list[tuple[float, ...]] = []
-    phi = 0.0
-    pose = np.asarray(pose, dtype=float)
-
-    def sweep(to: float) -> None:
-        k = max(1, math.ceil(abs(to - phi) / SWEEP_STEP))
-        rows.extend((*pose, float(p)) for p in np.linspace(phi, to, k + 1))
-
-    for leg in legs:
-        turn = phi_g * float(np.sign(leg.kappa)) if abs(leg.kappa) * radius > 0.5 else 0.0
-        sweep(turn)
-        phi = turn
-        k = max(1, math.ceil(abs(leg.length) / MOTION_STEP))
-        rows.extend((*leg_end(pose, leg.kappa, leg.length * j / k), phi)
-                    for j in range(1, k + 1))
-        pose = leg_end(pose, leg.kappa, leg.length)
-    sweep(0.0)
-    return np.array(rows)
 
 
 #: Largest change of the trailer's pose between two waypoints of one turn at rest.
