@@ -130,9 +130,6 @@ def test_two_trailers_refused():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(reason="known gap (benchmarks/RESULTS.md, issue 20 trailers): a lifted "
-                   "turn at rest into the curb that the motion validator did not see",
-                   strict=False)
 def test_parking_with_the_trailer_guide():
     """The third pair of benchmarks/plan_world.py's ``parking`` (rounded) parked with the
     guide: the scipy replay reaches the goal, keeps |θ0 − θ1| ≤ 1.4, its bodies apart and

@@ -103,11 +103,11 @@ PHI_STEP = 0.1
 IMPROVE_FRACTION = 0.5
 IMPROVE_SECONDS = 15.0
 #: Seconds of RRT* without a first path after which its tree is cleared and grown anew
-#: (:func:`~nilpotent.planning.holonomic_path.anytime_solve`): with the trailer guide's turns
-#: at rest, the parking slot is a narrow passage and a tree can stall there (the
-#: ``parking`` goal (1.7, -0.55) from (-2.5, 1, 0.1, 0.1): seeds 1-3 found a first path
-#: within about 11 s, seed 0 none in 84 s, its goal's neighbours retrying the same failing
-#: curves; with the restart, seed 0 found one at 20 s, on its second tree).
+#: (:func:`~nilpotent.planning.holonomic_path.anytime_solve`): a tree can stall at a narrow
+#: goal, its goal's neighbours retrying the same failing curves (the trailer guide of
+#: :mod:`~nilpotent.planning.trailer_guide` before its states carried the hitch angle: the
+#: ``parking`` goal (1.7, -0.55) from (-2.5, 1, 0.1, 0.1), seed 0, no path in 84 s; with the
+#: restart, one at 20 s, on its second tree).  The trailer guide's search keeps it.
 RESTART_SECONDS = 15.0
 #: Largest step (length units) at which OMPL checks the poses along a motion.
 CHECK_STEP = 0.02
@@ -219,16 +219,15 @@ def guide_path(
     resolution: float = 0.05,
     valid: Callable[[np.ndarray], np.ndarray] | None = None,
     held: Sequence[int] = (),
-    motion: Callable[[Any, Any], Any] | None = None,
 ) -> GuidePath:
     """The Reeds–Shepp guide from ``x0`` to ``xg`` (module doc), within ``seconds``.
 
     Parameters as :func:`~nilpotent.planning.holonomic_path.ompl_path` (``held`` is
     ignored: ``φ`` is set by the lifting, from ``x0``'s to ``xg``'s); without ``valid``,
     the checker's validity with the extra clearance :data:`GUIDE_MARGIN` (none when the
-    start or the goal lacks it).  ``motion``: when given, ``motion(space, si)`` returns
-    OMPL's motion validator (default: OMPL's checks of the poses every :data:`CHECK_STEP`;
-    :mod:`nilpotent.planning.trailer_guide` checks the motion of the lifted legs).
+    start or the goal lacks it); OMPL checks the poses along a curve every
+    :data:`CHECK_STEP`.  (:mod:`nilpotent.planning.trailer_guide` runs its own search, with
+    the hitch angle in the state, on this module's legs and lifting.)
 
     Raises
     ------
@@ -272,9 +271,6 @@ def guide_path(
     si.setStateValidityChecker(pose_valid)
     step = min(resolution, CHECK_STEP)
     si.setStateValidityCheckingResolution(step / max(space.getMaximumExtent(), 1e-12))
-    validator = None if motion is None else motion(space, si)
-    if validator is not None:
-        si.setMotionValidator(validator)
     si.setup()
     start: Any = space.allocState()  # SE(2) states (the stubs say State)
     goal: Any = space.allocState()

@@ -241,9 +241,16 @@ def motion_pieces(pose: Sequence[float] | np.ndarray, legs: Sequence[Leg], phi_f
 
 
 def _admitted(checker: Checker, hitch: float, pieces: Sequence[np.ndarray]) -> bool:
-    """Whether every piece of :func:`motion_pieces` is admissible under ``checker`` with the
-    cover of its steps (:meth:`~nilpotent.planning.verify.Checker.valid_motion`)."""
-    return all(checker.valid_motion(from_car(p, hitch)) for p in pieces)
+    """Whether the motion of :func:`motion_pieces` is admissible under ``checker`` with the
+    cover of its largest step (:meth:`~nilpotent.planning.verify.Checker.valid_motion` on
+    the pieces joined; every :data:`PRECHECK`-th configuration checked first, without the
+    cover: most rejected motions are rejected there, at a fraction of the cost)."""
+    q = from_car(np.concatenate(pieces), hitch)
+    return bool(np.all(checker.valid(q[::PRECHECK]))) and checker.valid_motion(q)
+
+
+#: Stride of the quick check of :func:`_admitted`.
+PRECHECK = 8
 
 
 def trailer_guide_path(
