@@ -324,10 +324,10 @@ def guide_path(
                      tuple(history), radius)
 
 
-def edge_poses(space: Any, a: Any, b: Any) -> np.ndarray:
+def edge_poses(space: Any, a: Any, b: Any, step: float = LEG_SAMPLE_STEP) -> np.ndarray:
     """Dense samples ``(N, 3)`` of the Reeds–Shepp curve from state ``a`` to ``b``, every
-    :data:`LEG_SAMPLE_STEP` of arc length at most."""
-    n = max(2, math.ceil(float(space.distance(a, b)) / LEG_SAMPLE_STEP) + 1)
+    ``step`` of arc length at most (default :data:`LEG_SAMPLE_STEP`)."""
+    n = max(2, math.ceil(float(space.distance(a, b)) / step) + 1)
     out: Any = space.allocState()
     poses = np.empty((n, 3))
     for i, t in enumerate(np.linspace(0.0, 1.0, n)):

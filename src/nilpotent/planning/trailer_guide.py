@@ -18,15 +18,29 @@ are exact motions of the true system:
 * a **turn at rest**: ``u = (0, Δφ)``, the car turning on the spot about its axle centre,
   the trailer still.
 
-:func:`trailer_guide_path` runs :func:`~nilpotent.planning.guide.guide_path` on a stand-in
-checker of the built-in ``car`` (``L = d``, ``|φ| ≤`` :data:`TRAILER_PHI` ``+`` the guide's
-``PHI_MARGIN``) whose validity is that of the trailer model with the guide's margin: a pose
-valid at ``φ = 0``, a Reeds–Shepp curve valid with the hitch angle of each of its legs and
-the car's turns at rest between them (an OMPL motion validator, :func:`_validator`); it maps
-the waypoints back to the model's coordinates; :func:`trailer_exact_piece` drives a piece
-between two of them exactly (else the piece is steered by the nilpotent steering, as for
-any path).  ``car-trailers:2`` and more are not covered (their relative angles cannot all
-be held on a Reeds–Shepp arc entered at rest).
+:func:`trailer_guide_path` searches with OMPL RRT* (as
+:func:`~nilpotent.planning.guide.guide_path`: path length, improvement after the first path,
+a new tree after ``RESTART_SECONDS`` without one) in the trailer's Reeds–Shepp poses
+``(x1, y1, θ1)`` **and hitch angles** ``φ`` (a compound space, ``|Δφ|`` weighted by
+:data:`PHI_WEIGHT`): a state is valid when its configuration is, under the checker with the
+guide's margin (none when the start or the goal lacks it); a curve between two states
+(:func:`_validator`) is the car turning at rest from the first state's ``φ`` to its first
+leg's, its legs (solved as the lifting solves them,
+:func:`~nilpotent.planning.guide.edge_legs`) each at its hitch angle with turns at rest
+between them, and a turn at rest to the second state's ``φ``, every configuration checked
+with the cover of its steps (:func:`motion_pieces`).  A vertex's hitch angle is thus what
+its curves need, not a fixed ``φ = 0`` (then every vertex demanded a turn at rest to and
+from ``0``: in the parking slot, where the car cannot swing towards the curb, no right
+turn could end or start there and the search stalled); the lifted path turns at a vertex
+from one curve's last hitch angle straight to the next one's first, within the two turns
+checked through the vertex's own angle.  OMPL's simplifier cuts curves at new vertices
+whose turns it never passes to the validator, so the simplified path is kept only if the
+whole lifted motion passes the check in the exact pieces' steps (:func:`_lifted`), else
+the path with its vertices reduced (every curve checked), else the search's own.  The
+waypoints are mapped back to the model's coordinates; :func:`trailer_exact_piece` drives
+a piece between two of them exactly (else the piece is steered by the nilpotent steering,
+as for any path).  ``car-trailers:2`` and more are not covered (their relative angles
+cannot all be held on a Reeds–Shepp arc entered at rest).
 """
 
 from __future__ import annotations
@@ -200,6 +214,12 @@ SWEEP_STEP = 0.02
 #: (:func:`trailer_exact_piece`: :data:`EXACT_STEP` of the trailer's arc, the turns at rest
 #: in steps of ``PHI_MARGIN``).
 FINAL_SWEEP_STEP = PHI_MARGIN
+#: Arc length between the samples of a curve whose legs are solved (validator and lifting
+#: alike, so that both drive the same legs; five times the car guide's
+#: ``LEG_SAMPLE_STEP``: the samples cost most of a motion check, and a leg shorter than a
+#: step is still found by :func:`~nilpotent.planning.guide.edge_legs`, else the curve is
+#: refused).
+LEG_STEP = 0.01
 #: Weight of the hitch angle's change (length units per rad) in the distance between two
 #: OMPL states (Reeds–Shepp length of the trailer ``+ PHI_WEIGHT |Δφ|``).
 PHI_WEIGHT = 0.1
@@ -233,11 +253,22 @@ def motion_pieces(pose: Sequence[float] | np.ndarray, legs: Sequence[Leg], phi_f
         turn(new)
         phi = new
         k = max(1, math.ceil(abs(leg.length) / step))
-        pieces.append(np.array([(*leg_end(here, leg.kappa, leg.length * j / k), phi)
-                                for j in range(k + 1)]))
+        pieces.append(_arc(here, leg.kappa, np.linspace(0.0, leg.length, k + 1), phi))
         here = leg_end(here, leg.kappa, leg.length)
     turn(float(phi_to))
     return pieces or [np.array([(*here, phi)])]
+
+
+def _arc(pose: np.ndarray, kappa: float, s: np.ndarray, phi: float) -> np.ndarray:
+    """``(len(s), 4)``: the poses of :func:`~nilpotent.planning.guide.leg_end` from ``pose``
+    after the arc lengths ``s`` (its closed form on an array), with the hitch angle ``phi``."""
+    x, y, th = (float(c) for c in pose)
+    if kappa == 0.0:
+        return np.column_stack([x + s * math.cos(th), y + s * math.sin(th), np.full_like(s, th),
+                                np.full_like(s, phi)])
+    end = th + kappa * s
+    return np.column_stack([x + (np.sin(end) - math.sin(th)) / kappa,
+                            y - (np.cos(end) - math.cos(th)) / kappa, end, np.full_like(s, phi)])
 
 
 def _admitted(checker: Checker, hitch: float, pieces: Sequence[np.ndarray]) -> bool:
@@ -403,7 +434,7 @@ def _lifted(checker: Checker, hitch: float, radius: float, space: Any,
     :data:`FINAL_SWEEP_STEP`): exactly what :func:`trailer_exact_piece` will drive."""
     try:
         legs = merge_legs([leg for a, b in itertools.pairwise(vertices)
-                           for leg in edge_legs(edge_poses(space, a[0], b[0]), radius,
+                           for leg in edge_legs(edge_poses(space, a[0], b[0], LEG_STEP), radius,
                                                 float(space.distance(a[0], b[0])))])
         points = lift_legs(legs, s0, sg, hitch)
     except PlanningError:
@@ -446,7 +477,7 @@ def _validator(checker: Checker, hitch: float, radius: float, poses: Any, si: An
         def checkMotion(self, a: Any, b: Any, *rest: Any) -> bool:
             pa, pb = a[0], b[0]
             try:
-                legs = edge_legs(edge_poses(poses, pa, pb), radius,
+                legs = edge_legs(edge_poses(poses, pa, pb, LEG_STEP), radius,
                                  float(poses.distance(pa, pb)))
             except PlanningError:
                 return False
