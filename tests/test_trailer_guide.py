@@ -234,3 +234,42 @@ def test_a_hitch_limit_within_the_guide_margin_is_refused_naming_it(tmp_path):
     with pytest.raises(OptionError, match=r"0\.0025 < phi_max < pi/2"):
         plan_global(load_model_file(path), (0, 0, 0, 0), (3, 1, 0, 0),
                     planner="reeds-shepp", time_limit=600)
+
+
+def test_a_hitch_angle_held_where_the_car_cannot_turn_at_rest():
+    """The trailer at the origin, the car's hitch angle -1.2 beside a wall where the car
+    cannot turn at rest to 0 (checked on the model's own configurations): a vertex of the
+    guide takes the hitch angle its curves need (when every vertex had 0, no curve could
+    leave this start).  The goal is 0.5 ahead on the right arc of the guide's radius; the
+    path leaves the start without turning at rest, every piece is driven exactly, and the
+    scipy replay reaches the goal with the hitch angle within its limit, out of the wall."""
+    from nilpotent.planning.guide import leg_end
+    from nilpotent.planning.trailer_guide import trailer_guide_path
+    from nilpotent.planning.world import world_from_dict
+
+    world = world_from_dict({
+        "name": "wall", "bounds": {"x": [-4.0, 5.0], "y": [-4.0, 3.0]},
+        "obstacles": [{"polygon": [[1.45, -0.3], [3.0, -0.3], [3.0, 0.3], [1.45, 0.3]]}]})
+    checker = Checker(SYSTEM, world)
+    g = trailer_geometry(SYSTEM, checker)
+    phi = -g.phi_guide
+    start = from_car(np.array([0.0, 0.0, 0.0, phi]), g.hitch)
+    goal = from_car(np.array([*leg_end(np.zeros(3), math.tan(phi) / g.hitch, 0.5), phi]),
+                    g.hitch)
+    for turned in (-0.6, 0.0, 0.6):
+        assert not checker.valid(from_car(np.array([[0.0, 0.0, 0.0, turned]]), g.hitch))[0]
+    found = trailer_guide_path(checker, start, goal, 10.0, seed=0)
+    points = [np.array(p) for p in found.points]
+    assert np.allclose(points[0], start) and np.allclose(points[-1], goal)
+    first = to_car(points[1], g.hitch)
+    assert first[3] == pytest.approx(phi, abs=1e-9) and np.abs(first[:2]).max() > 1e-3
+    x, segments = start, []
+    for prev, w in itertools.pairwise(points):
+        piece = trailer_exact_piece(checker, x, prev, w, 1e-6, 40, g)
+        assert piece is not None
+        segments += _json(piece)
+        x = np.array(piece.reached)
+    q = resimulate(SYSTEM, start, segments, samples=50)
+    assert np.linalg.norm(q[-1] - goal) <= 1e-5
+    assert np.abs(q[:, 2] - q[:, 3]).max() <= HITCH_LIMIT + 1e-9
+    assert np.all(checker.measures(q)[0] > 0)
