@@ -49,6 +49,7 @@ import dataclasses
 import functools
 import itertools
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -59,12 +60,11 @@ import sympy as sp
 from nilpotent.core.model.outline import Limits
 from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import OptionError, PlanningError
+from nilpotent.planning import budget
 from nilpotent.planning.guide import (
     GUIDE_MARGIN,
     IMPROVE_FRACTION,
-    IMPROVE_SECONDS,
     PHI_MARGIN,
-    RESTART_SECONDS,
     GuidePath,
     Leg,
     edge_legs,
@@ -73,7 +73,11 @@ from nilpotent.planning.guide import (
     lift_legs,
     merge_legs,
 )
-from nilpotent.planning.holonomic_path import SIMPLIFY_SECONDS, anytime_solve, box
+from nilpotent.planning.holonomic_path import (
+    SIMPLIFY_SECONDS,
+    SLICE_SECONDS,
+    box,
+)
 from nilpotent.planning.verify import Checker
 
 __all__ = [
@@ -220,6 +224,11 @@ FINAL_SWEEP_STEP = PHI_MARGIN
 #: step is still found by :func:`~nilpotent.planning.guide.edge_legs`, else the curve is
 #: refused).
 LEG_STEP = 0.01
+#: Seconds (at most ``IMPROVE_FRACTION`` of the search's) of new RRTConnect trees after the
+#: first path, the shortest lifted path kept: the exact pieces of a path (about 200
+#: waypoints in the parking slot) take 10-20 s more to drive and verify on a loaded machine
+#: (benchmarks/RESULTS.md, 60 s per query).
+TRAILER_IMPROVE_SECONDS = 6.0
 #: Weight of the hitch angle's change (length units per rad) in the distance between two
 #: OMPL states (Reeds–Shepp length of the trailer ``+ PHI_WEIGHT |Δφ|``).
 PHI_WEIGHT = 0.1
@@ -303,6 +312,11 @@ def trailer_guide_path(
     validity with the guide's margin, none when the start or the goal lacks it; each curve
     checked as :func:`_validator`, the whole path as :func:`_lifted`).
 
+    Returns the waypoints (the model's coordinates, ``x0`` and ``xg`` included), the
+    trailer's Reeds–Shepp length (the legs' arc lengths summed), RRT*'s best cost after
+    each slice (that length ``+`` :data:`PHI_WEIGHT` ``×`` the vertices' changes of ``φ``)
+    and the trailer's turning radius ``d / tan φ_g``.
+
     Raises
     ------
     OptionError
@@ -380,50 +394,101 @@ def _search(checker: Checker, kept: Checker, geometry: TrailerGeometry, s0: np.n
         st[0].setY(float(s[1]))
         st[0].setYaw(float(s[2]))
         st[1][0] = float(s[3])
+    what = f"a Reeds-Shepp path of the trailer (radius {radius:.3g})"
+    lift = functools.partial(_lifted, checker, d, radius, poses, s0=s0, sg=sg)
     pdef = ob.ProblemDefinition(si)
     pdef.setStartAndGoalStates(start, goal)
-    pdef.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
-    planner = og.RRTstar(si)
+    planner = og.RRTConnect(si)
     planner.setProblemDefinition(pdef)
     planner.setup()
-    improve = min(IMPROVE_FRACTION * seconds, IMPROVE_SECONDS)
+    improve = min(IMPROVE_FRACTION * seconds, TRAILER_IMPROVE_SECONDS)
+    found: list[tuple[list[np.ndarray], float]] = []
+    history: list[tuple[float, float]] = []
+    t0 = time.perf_counter()
+    first: float | None = None
     try:
-        history = anytime_solve(planner, pdef, seconds, improve,
-                                f"a Reeds-Shepp path of the trailer (radius {radius:.3g})",
-                                RESTART_SECONDS)
-        raw: Any = og.PathGeometric(pdef.getSolutionPath())  # the stubs say Path
-        # shortcuts and smoothing cut curves at new vertices, whose turns at rest from the
-        # cut curve's hitch angle were never checked: that path is kept only if it passes
-        # the final check, else the one with fewer vertices (every curve checked)
-        simplifier = og.PathSimplifier(si)
-        reduced: Any = og.PathGeometric(raw)
-        simplifier.reduceVertices(reduced)
-        simplifier.collapseCloseVertices(reduced)
-        smooth: Any = og.PathGeometric(reduced)
-        simplifier.simplify(smooth, float(min(SIMPLIFY_SECONDS, seconds)))
-        lifted = None
-        for path in (smooth, reduced, raw):
-            vertices = [path.getState(i) for i in range(path.getStateCount())]
-            lifted = _lifted(checker, d, radius, poses, vertices, s0, sg)
-            if lifted is not None:
+        # the Reeds-Shepp curve from the start to the goal, when admitted, is the shortest;
+        # else two trees (the goal's grows out of the parking slot), grown anew after each
+        # path for the improvement time: the shortest lifted path is kept
+        direct = lift([start, goal]) if si.checkMotion(start, goal) else None
+        if direct is not None:
+            found.append(direct)
+            history.append((time.perf_counter() - t0, direct[1]))
+        while direct is None:
+            spent = time.perf_counter() - t0
+            end = seconds if first is None else min(seconds, first + improve)
+            try:
+                _first_path(planner, pdef, end - spent, what)
+            except PlanningError:
+                if first is None:
+                    raise
                 break
+            lifted = _simplified(si, og.PathGeometric(pdef.getSolutionPath()), seconds, lift)
+            planner.clear()
+            pdef.clearSolutionPaths()
+            if lifted is None:
+                continue
+            first = time.perf_counter() - t0 if first is None else first
+            if not found or lifted[1] < min(f[1] for f in found):
+                history.append((time.perf_counter() - t0, lifted[1]))
+            found.append(lifted)
     finally:
         # break the references between Python objects and OMPL's (no leak at exit)
         planner.clear()
         pdef.clearSolutionPaths()
         del planner, pdef
-    if lifted is None:
-        raise PlanningError("the trailer guide's path fails the final motion check "
-                            "(every curve passed the validator)")
-    points, length = lifted
+    points, length = min(found, key=lambda f: f[1])
     out = [from_car(np.array(p), d) for p in points]
     out[0], out[-1] = np.asarray(ends[0], dtype=float), np.asarray(ends[1], dtype=float)
     return GuidePath(tuple(tuple(float(c) for c in p) for p in out), length,
                      tuple(history), radius)
 
 
+def _first_path(planner: Any, pdef: Any, seconds: float, what: str) -> None:
+    """Run ``planner`` (RRTConnect) in slices of ``SLICE_SECONDS`` until an exact solution
+    (the budget in force checked before each slice).
+
+    Raises
+    ------
+    PlanningError
+        None within ``seconds``.
+    """
+    t0 = time.perf_counter()
+    while not pdef.hasExactSolution():
+        left = seconds - (time.perf_counter() - t0)
+        if left <= 0:
+            raise PlanningError(
+                f"no collision-free {what.removeprefix('a ')} from OMPL RRTConnect within "
+                f"{seconds:.3g} s; raise --time-limit, or check that start and goal are "
+                "connected in the free space")
+        budget.check(f"looking for {what} with OMPL RRTConnect")
+        planner.solve(float(min(SLICE_SECONDS, left)))
+
+
+def _simplified(si: Any, raw: Any, seconds: float,
+                lift: Callable[[Sequence[Any]], tuple[list[np.ndarray], float] | None]
+                ) -> tuple[list[np.ndarray], float] | None:
+    """``lift`` (:func:`_lifted`) of the path ``raw`` simplified by OMPL; OMPL's shortcuts
+    and smoothing cut curves at new vertices whose turns at rest from the cut curve's hitch
+    angle it never checks, so that path is kept only if it passes the final check, else
+    the path with its vertices reduced (every curve checked), else ``raw``."""
+    from ompl import geometric as og
+
+    simplifier = og.PathSimplifier(si)
+    reduced: Any = og.PathGeometric(raw)
+    simplifier.reduceVertices(reduced)
+    simplifier.collapseCloseVertices(reduced)
+    smooth: Any = og.PathGeometric(reduced)
+    simplifier.simplify(smooth, float(min(SIMPLIFY_SECONDS, seconds)))
+    for path in (smooth, reduced, raw):
+        lifted = lift([path.getState(i) for i in range(path.getStateCount())])
+        if lifted is not None:
+            return lifted
+    return None
+
+
 def _lifted(checker: Checker, hitch: float, radius: float, space: Any,
-            vertices: Sequence[Any], s0: np.ndarray, sg: np.ndarray
+            vertices: Sequence[Any], *, s0: np.ndarray, sg: np.ndarray
             ) -> tuple[list[np.ndarray], float] | None:
     """The waypoints (car coordinates of the trailer) of :func:`~nilpotent.planning.guide.
     lift_legs` along the curves between OMPL's ``vertices`` (compound states) from ``s0`` to
