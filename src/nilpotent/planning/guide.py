@@ -107,7 +107,7 @@ IMPROVE_SECONDS = 15.0
 #: goal, its goal's neighbours retrying the same failing curves (the trailer guide of
 #: :mod:`~nilpotent.planning.trailer_guide` before its states carried the hitch angle: the
 #: ``parking`` goal (1.7, -0.55) from (-2.5, 1, 0.1, 0.1), seed 0, no path in 84 s; with the
-#: restart, one at 20 s, on its second tree).  The trailer guide's search keeps it.
+#: restart, one at 20 s, on its second tree; that guide now searches otherwise).
 RESTART_SECONDS = 15.0
 #: Largest step (length units) at which OMPL checks the poses along a motion.
 CHECK_STEP = 0.02

@@ -18,9 +18,11 @@ are exact motions of the true system:
 * a **turn at rest**: ``u = (0, Δφ)``, the car turning on the spot about its axle centre,
   the trailer still.
 
-:func:`trailer_guide_path` searches with OMPL RRT* (as
-:func:`~nilpotent.planning.guide.guide_path`: path length, improvement after the first path,
-a new tree after ``RESTART_SECONDS`` without one) in the trailer's Reeds–Shepp poses
+:func:`trailer_guide_path` takes the Reeds–Shepp curve from the start to the goal when it is
+admitted, else searches with OMPL RRTConnect (two trees: the goal's grows out of a
+parking slot, where RRT*'s one tree took 16 s to over 43 s for a first path on a loaded
+machine), grown anew for :data:`TRAILER_IMPROVE_SECONDS` after the first path, the
+shortest lifted path kept, in the trailer's Reeds–Shepp poses
 ``(x1, y1, θ1)`` **and hitch angles** ``φ`` (a compound space, ``|Δφ|`` weighted by
 :data:`PHI_WEIGHT`): a state is valid when its configuration is, under the checker with the
 guide's margin (none when the start or the goal lacks it); a curve between two states
@@ -230,7 +232,8 @@ LEG_STEP = 0.01
 #: (benchmarks/RESULTS.md, 60 s per query).
 TRAILER_IMPROVE_SECONDS = 6.0
 #: Weight of the hitch angle's change (length units per rad) in the distance between two
-#: OMPL states (Reeds–Shepp length of the trailer ``+ PHI_WEIGHT |Δφ|``).
+#: OMPL states (Reeds–Shepp length of the trailer ``+ PHI_WEIGHT |Δφ|``; the trees' nearest
+#: neighbours).
 PHI_WEIGHT = 0.1
 
 
@@ -307,15 +310,14 @@ def trailer_guide_path(
     in the model's coordinates.
 
     Parameters as :func:`~nilpotent.planning.guide.guide_path` (``seconds``: the search's
-    budget, RRT* improving its first path for ``min(IMPROVE_FRACTION seconds,
-    IMPROVE_SECONDS)``); ``resolution``, ``valid`` and ``held`` are ignored (the checker's
-    validity with the guide's margin, none when the start or the goal lacks it; each curve
-    checked as :func:`_validator`, the whole path as :func:`_lifted`).
+    budget, new trees grown after the first path for ``IMPROVE_FRACTION`` of it, at most
+    :data:`TRAILER_IMPROVE_SECONDS`); ``resolution``, ``valid`` and ``held`` are ignored
+    (the checker's validity with the guide's margin, none when the start or the goal lacks
+    it; each curve checked as :func:`_validator`, the whole path as :func:`_lifted`).
 
     Returns the waypoints (the model's coordinates, ``x0`` and ``xg`` included), the
-    trailer's Reeds–Shepp length (the legs' arc lengths summed), RRT*'s best cost after
-    each slice (that length ``+`` :data:`PHI_WEIGHT` ``×`` the vertices' changes of ``φ``)
-    and the trailer's turning radius ``d / tan φ_g``.
+    trailer's Reeds–Shepp length (the legs' arc lengths summed), ``(seconds, length)`` of
+    each shorter lifted path found, and the trailer's turning radius ``d / tan φ_g``.
 
     Raises
     ------
@@ -351,8 +353,8 @@ def trailer_guide_path(
 def _search(checker: Checker, kept: Checker, geometry: TrailerGeometry, s0: np.ndarray,
             sg: np.ndarray, seconds: float, seed: int | None,
             ends: tuple[np.ndarray, np.ndarray]) -> GuidePath:
-    """OMPL RRT* in the trailer's Reeds–Shepp poses and hitch angles (module doc), its path
-    simplified and lifted (:func:`_lifted`)."""
+    """The direct curve, else OMPL RRTConnect, in the trailer's Reeds–Shepp poses and hitch
+    angles (module doc), each path simplified and lifted (:func:`_simplified`)."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
@@ -406,6 +408,7 @@ def _search(checker: Checker, kept: Checker, geometry: TrailerGeometry, s0: np.n
     history: list[tuple[float, float]] = []
     t0 = time.perf_counter()
     first: float | None = None
+    rejected = 0
     try:
         # the Reeds-Shepp curve from the start to the goal, when admitted, is the shortest;
         # else two trees (the goal's grows out of the parking slot), grown anew after each
@@ -419,14 +422,16 @@ def _search(checker: Checker, kept: Checker, geometry: TrailerGeometry, s0: np.n
             end = seconds if first is None else min(seconds, first + improve)
             try:
                 _first_path(planner, pdef, end - spent, what)
-            except PlanningError:
+            except PlanningError as e:
                 if first is None:
-                    raise
+                    raise PlanningError(f"{e} ({rejected} failed the final motion check)"
+                                        if rejected else str(e)) from None
                 break
             lifted = _simplified(si, og.PathGeometric(pdef.getSolutionPath()), seconds, lift)
             planner.clear()
             pdef.clearSolutionPaths()
             if lifted is None:
+                rejected += 1  # not expected: every curve passed the validator
                 continue
             first = time.perf_counter() - t0 if first is None else first
             if not found or lifted[1] < min(f[1] for f in found):
