@@ -230,7 +230,7 @@ LEG_STEP = 0.01
 #: first path, the shortest lifted path kept: the exact pieces of a path (about 200
 #: waypoints in the parking slot) take 10-20 s more to drive and verify on a loaded machine
 #: (benchmarks/RESULTS.md, 60 s per query).
-TRAILER_IMPROVE_SECONDS = 6.0
+TRAILER_IMPROVE_SECONDS = 10.0
 #: Weight of the hitch angle's change (length units per rad) in the distance between two
 #: OMPL states (Reeds–Shepp length of the trailer ``+ PHI_WEIGHT |Δφ|``; the trees' nearest
 #: neighbours).
@@ -427,11 +427,13 @@ def _search(checker: Checker, kept: Checker, geometry: TrailerGeometry, s0: np.n
                     raise PlanningError(f"{e} ({rejected} failed the final motion check)"
                                         if rejected else str(e)) from None
                 break
-            lifted = _simplified(si, og.PathGeometric(pdef.getSolutionPath()), seconds, lift)
+            best = min((f[1] for f in found), default=math.inf)
+            lifted = _simplified(si, og.PathGeometric(pdef.getSolutionPath()), seconds, lift,
+                                 lambda v, best=best: _length(poses, v) < best)
             planner.clear()
             pdef.clearSolutionPaths()
             if lifted is None:
-                rejected += 1  # not expected: every curve passed the validator
+                rejected += not found  # not expected: every curve passed the validator
                 continue
             first = time.perf_counter() - t0 if first is None else first
             if not found or lifted[1] < min(f[1] for f in found):
@@ -471,25 +473,45 @@ def _first_path(planner: Any, pdef: Any, seconds: float, what: str) -> None:
 
 
 def _simplified(si: Any, raw: Any, seconds: float,
-                lift: Callable[[Sequence[Any]], tuple[list[np.ndarray], float] | None]
+                lift: Callable[[Sequence[Any]], tuple[list[np.ndarray], float] | None],
+                shorter: Callable[[Sequence[Any]], bool]
                 ) -> tuple[list[np.ndarray], float] | None:
     """``lift`` (:func:`_lifted`) of the path ``raw`` simplified by OMPL; OMPL's shortcuts
     and smoothing cut curves at new vertices whose turns at rest from the cut curve's hitch
     angle it never checks, so that path is kept only if it passes the final check, else
-    the path with its vertices reduced (every curve checked), else ``raw``."""
+    the path with its vertices reduced (every curve checked), else ``raw``; ``None`` when
+    none passes, or when the first whose vertices are ``shorter`` is not (a longer path than
+    one already found is not lifted)."""
     from ompl import geometric as og
 
     simplifier = og.PathSimplifier(si)
-    reduced: Any = og.PathGeometric(raw)
-    simplifier.reduceVertices(reduced)
-    simplifier.collapseCloseVertices(reduced)
-    smooth: Any = og.PathGeometric(reduced)
-    simplifier.simplify(smooth, float(min(SIMPLIFY_SECONDS, seconds)))
-    for path in (smooth, reduced, raw):
-        lifted = lift([path.getState(i) for i in range(path.getStateCount())])
+
+    def smooth() -> Any:
+        path: Any = og.PathGeometric(raw)
+        simplifier.simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))
+        return path
+
+    def reduced() -> Any:
+        path: Any = og.PathGeometric(raw)
+        simplifier.reduceVertices(path)
+        simplifier.collapseCloseVertices(path)
+        return path
+
+    for make in (smooth, reduced, lambda: raw):
+        path = make()
+        vertices = [path.getState(i) for i in range(path.getStateCount())]
+        if not shorter(vertices):
+            return None
+        lifted = lift(vertices)
         if lifted is not None:
             return lifted
     return None
+
+
+def _length(space: Any, vertices: Sequence[Any]) -> float:
+    """The Reeds–Shepp length of the curves between OMPL's ``vertices`` (compound states),
+    ``space`` their Reeds–Shepp part: the length of their lifted legs."""
+    return sum(float(space.distance(a[0], b[0])) for a, b in itertools.pairwise(vertices))
 
 
 def _lifted(checker: Checker, hitch: float, radius: float, space: Any,
