@@ -429,7 +429,7 @@ def plan_global(
     seed:
         Seed of OMPL's random sampling (``None``: OMPL's own).
     max_piece:
-        Longest piece steered at once (configuration-space Euclidean length).
+        Longest piece steered at once (configuration-space Euclidean length; not the guide's).
     engine : str or None
         The loose form of ``settings.engine`` (kept for one release; pass
         ``settings=IntegrationSettings(engine=...)`` instead): an integration engine
@@ -643,7 +643,8 @@ def _plan_global(
             f"the path found needs {pieces_needed:,} pieces of --max-piece {max_piece:g}, above "
             f"the limit of {MAX_PIECES:,}; raise --max-piece or plan to a nearer goal"
         )
-    waypoints = _densify(path, max_piece)
+    # a guide's waypoints bound exact legs (a chord's midpoint is on none: it is steered)
+    waypoints = list(path) if stage.car is not None else _densify(path, max_piece)
     # 3. steer piece by piece, halving pieces whose motion is not admissible
     targets: deque[tuple[np.ndarray, int]] = deque((w, 0) for w in waypoints[1:])
     x, prev = x0.copy(), x0.copy()
