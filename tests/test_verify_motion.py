@@ -131,3 +131,45 @@ def test_the_built_in_trailer_leaves_its_hitch_limit_by_driving_forward():
     backward = forward.copy()
     backward[:, 3] = 1.4 - backward_phi
     assert not checker.valid_motion(backward)
+
+
+# --- planners from a start on a limit: a plan that keeps it, checked by scipy --------------
+
+
+def _keeps(system, start, goal, limit_of, bound):
+    from nilpotent.planning.global_planner import plan_global
+    from replay import resimulate
+
+    out = plan_global(system, start, goal, 1e-6, time_limit=600, seed=0)
+    q = resimulate(system, start, [s.to_dict() for s in out.plan.segments], samples=200)
+    assert np.linalg.norm(q[-1] - np.asarray(goal)) <= 1e-5
+    assert np.all(np.abs(limit_of(q)) <= bound + 1e-9), np.abs(limit_of(q)).max() - bound
+
+
+@pytest.mark.slow
+def test_a_trailer_starting_on_its_hitch_limit_is_planned_within_it():
+    """``car-trailers:1`` from the hitch angle 1.4, its limit (refused before: every
+    motion from it failed the half-step margin)."""
+    _keeps(get_model("car-trailers:1"), (0.0, 0.0, 1.4, 0.0), (1.0, 0.5, 0.0, 0.0),
+           lambda q: q[:, 2] - q[:, 3], 1.4)
+
+
+@pytest.mark.slow
+def test_a_car_starting_on_its_steering_limit_is_planned_within_it():
+    """The built-in car (L = 3/5, least turning radius 1: |phi| <= atan(3/5)) from
+    ``phi = atan(3/5)``."""
+    bound = float(np.arctan(0.6))
+    _keeps(get_model("car"), (0.0, 0.0, 0.0, bound), (1.0, 0.3, 0.0, 0.0),
+           lambda q: q[:, 3], bound)
+
+
+def test_a_refusal_names_the_constraint_that_is_near():
+    """``constraints_near`` (the planner's refusal when pieces fail) names the limit a
+    configuration is on, and blames nothing where nothing is near."""
+    box = Checker(_plane(), limits=Limits((("x", LO, HI),)))
+    assert "x = 1 is on its bound 1" in box.constraints_near([HI, 0.0])
+    assert "0.01 from its bound -1" in box.constraints_near([LO + 0.01, 0.0])
+    assert box.constraints_near([0.0, 0.0]).startswith("no limit, obstacle or body within")
+    world = World("one disc", ((-5.0, 5.0), (-5.0, 5.0)), discs=(((0.0, 0.0), 0.5),))
+    near = Checker(_disc_robot(), world).constraints_near([0.51, 0.0])
+    assert "clearance to the obstacles is 0.01" in near

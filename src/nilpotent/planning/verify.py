@@ -31,7 +31,11 @@ from nilpotent.planning.robot import Robot, singular_margin_function
 from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.world import World
 
-__all__ = ["Checker", "Verification", "verify_segments", "verify_states"]
+__all__ = ["NEAR", "Checker", "Verification", "verify_segments", "verify_states"]
+
+#: How near a constraint must be to be named by :meth:`Checker.constraints_near` (model
+#: units / radians): about the reach of a steered piece of the shortest length.
+NEAR = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -251,6 +255,33 @@ class Checker:
         if self.margin_fn is not None and sing < self.singular_margin:  # type: ignore[attr-defined]
             reasons.append(f"singular margin {sing:.3g} below {self.singular_margin:g}")
         return "; ".join(reasons)
+
+    def constraints_near(self, q: Sequence[float] | State, within: float = NEAR) -> str:
+        """What constrains the configuration ``q`` within ``within`` (model units / radians),
+        in words: the limits whose margin is at most ``within`` (``"phi = 0.3 is 0 from its
+        bound 0.3"``), the clearance to the obstacles, the self-clearance, the singular
+        margin; ``"nothing within …"`` when none is that near (then the steering itself,
+        not a constraint, failed there).  For refusals that must not blame the wrong thing.
+        """
+        row = np.asarray(q, dtype=float)[None, :]
+        clear, _, sing = (float(v[0]) for v in self.measures(row))
+        out = []
+        if self.limits:
+            g, lo, hi = self.limit_values(row)
+            labels = [k for k, _, _ in self.limits.bounds] + [k for k, *_ in self.limits.relative]
+            for label, v, a, b in zip(labels, g[0], lo, hi, strict=True):
+                bound = a if abs(v - a) <= abs(b - v) else b
+                if not abs(v - bound) > within:  # NaN: named too
+                    off = "on" if v == bound else f"{abs(v - bound):.2g} from"
+                    out.append(f"{label} = {v:.4g} is {off} its bound {bound:.4g}")
+        if self.world is not None and not clear - self.clearance > within:
+            out.append(f"the clearance to the obstacles is {clear:.2g}")
+        self_clear = float(self.self_clearance(row)[0])
+        if not self_clear > within:
+            out.append(f"two bodies are {self_clear:.2g} apart")
+        if self.margin_fn is not None and not sing - self.singular_margin > within:  # type: ignore[attr-defined]
+            out.append(f"the singular margin is {sing:.2g}")
+        return "; ".join(out) or f"no limit, obstacle or body within {within:g} there"
 
     def _self_pair(self, q: Sequence[float] | State) -> str:
         """The first pair of bodies in contact at ``q``, in words."""
