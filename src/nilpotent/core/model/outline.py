@@ -174,15 +174,13 @@ def linear_form(expr: sp.Expr) -> tuple[sp.Expr, float, float] | None:
     symbols = sorted(expr.free_symbols, key=str)
     if not symbols:
         return None
-    try:
-        poly = sp.Poly(sp.expand(expr), *symbols)
-    except sp.PolynomialError:
+    # affine iff every partial derivative is a number (no expansion: a power of a long sum
+    # is not multiplied out); one whose derivatives only cancel to numbers stays as given
+    coeffs = [sp.diff(expr, s) for s in symbols]
+    if any(c.free_symbols for c in coeffs):
         return None
-    if poly.total_degree() != 1:
-        return None
-    coeffs = [poly.coeff_monomial(s) for s in symbols]
-    offset = poly.coeff_monomial(1)
-    if not all(c.is_number and c.is_real for c in [*coeffs, offset]):
+    offset = expr.subs(dict.fromkeys(symbols, 0))
+    if not all(c.is_number and c.is_real and c.is_finite for c in [*coeffs, offset]):
         return None
     scale = coeffs[0]
     if scale == 0:
