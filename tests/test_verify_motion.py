@@ -173,3 +173,9 @@ def test_a_refusal_names_the_constraint_that_is_near():
     world = World("one disc", ((-5.0, 5.0), (-5.0, 5.0)), discs=(((0.0, 0.0), 0.5),))
     near = Checker(_disc_robot(), world).constraints_near([0.51, 0.0])
     assert "clearance to the obstacles is 0.01" in near
+
+
+def test_a_state_that_is_not_finite_is_named_as_such():
+    checker = Checker(_plane(), limits=Limits((("x", LO, HI),)))
+    assert not checker.valid(np.array([[np.nan, 0.0]]))[0]
+    assert "not all finite" in checker.why_invalid([np.nan, 0.0])

@@ -233,6 +233,8 @@ class Checker:
 
     def why_invalid(self, q: Sequence[float] | State) -> str:
         """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""
+        if not np.all(np.isfinite(np.asarray(q, dtype=float))):
+            return "its coordinates are not all finite numbers (the motion diverged)"
         clear, lim, sing = (float(v[0]) for v in self.measures(np.asarray(q)[None, :]))
         reasons = []
         if not clear > self.clearance:  # NaN: not seen as free
