@@ -250,6 +250,7 @@ def guide_path(
     car = car_geometry(checker.system, checker)
     phi_g = car.phi_max - PHI_MARGIN
     radius = car.wheelbase / math.tan(phi_g)
+    own = valid is None  # the model's own configurations are checked (not a stand-in's)
     if valid is None:
         # the margin unless the start or the goal lacks it (a car parked close to a wall)
         ends = np.array([[*q[:3], phi] for q in (x0, xg) for phi in (-phi_g, 0.0, phi_g)])
@@ -287,10 +288,15 @@ def guide_path(
         st.setX(float(q[0]))
         st.setY(float(q[1]))
         st.setYaw(float(q[2]))
-    for what, st in (("start", start), ("goal", goal)):
+    for what, st, q in (("start", start, x0), ("goal", goal, xg)):
         if not pose_valid(st):
+            rows = np.array([[*q[:3], p] for p in steer])
+            row = rows[int(np.flatnonzero(~is_valid(rows))[0])]
+            why = (checker.why_invalid(row) or "it comes within the guide's margin "
+                   f"{GUIDE_MARGIN:g} of an obstacle") if own else ""
             raise PlanningError(f"the {what}'s pose is not admissible for every steering angle "
-                                f"|phi| <= {phi_g:.3g} of the Reeds-Shepp guide")
+                                f"|phi| <= {phi_g:.3g} of the Reeds-Shepp guide"
+                                + (f" (at phi = {row[3]:.3g}, {why})" if why else ""))
     pdef = ob.ProblemDefinition(si)
     pdef.setStartAndGoalStates(start, goal)
     pdef.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
@@ -631,8 +637,8 @@ def exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray
     d = w - prev
     if float(np.abs(d[:3]).max()) <= AT_REST:
         u = (0.0, float(w[3] - x[3]))
-        # the motion check covers the steps between samples by half a step of φ: a turn
-        # ending at ±φ_g must take steps of at most 2 PHI_MARGIN
+        # φ is linear in time (the limit's cover is exact), the wheels' outline turns on
+        # arcs: steps of at most PHI_MARGIN keep that cover small
         points = max(points, math.ceil(abs(u[1]) / PHI_MARGIN) + 1)
     elif abs(float(d[3])) <= AT_REST:
         kappa = math.tan(float(prev[3])) / wheelbase

@@ -115,17 +115,22 @@ def trailer_geometry(system: ControlSystem, checker: Checker) -> TrailerGeometry
         if name in ("theta0", "theta1"):
             raise OptionError(f"--planner reeds-shepp: the trailer guide takes no limit on "
                               f"{name} (only on theta0 - theta1)")
-    for _, expr, lo_r, hi_r in checker.limits.relative:
-        if sp.simplify(expr - (th0 - th1)) == 0:
+    # linear relative limits are normalised where they are made (Limits): every form of the
+    # hitch angle (2*theta0 - 2*theta1, theta1 - theta0, ...) is theta0 - theta1 here
+    other = []
+    for label, expr, lo_r, hi_r in checker.limits.relative:
+        if sp.expand(expr - (th0 - th1)) == 0:
             lo, hi = max(lo, lo_r), min(hi, hi_r)
-        elif sp.simplify(expr + (th0 - th1)) == 0:
-            lo, hi = max(lo, -hi_r), min(hi, -lo_r)
+        elif expr.free_symbols & {th0, th1}:
+            other.append(label)
     phi_max = min(-lo, hi)
     if not (PHI_MARGIN < phi_max < math.pi / 2):
+        unread = (f" (the guide reads the hitch limit only from a linear one, a*(theta0 - "
+                  f"theta1) + b; not from {', '.join(map(repr, other))})" if other else "")
         raise OptionError(
             f"--planner reeds-shepp needs a hitch limit |theta0 - theta1| <= phi_max with "
             f"{PHI_MARGIN:g} < phi_max < pi/2; "
-            f"model {system.name} has theta0 - theta1 in [{lo:g}, {hi:g}]")
+            f"model {system.name} has theta0 - theta1 in [{lo:g}, {hi:g}]{unread}")
     return TrailerGeometry(hitch, phi_max)
 
 
@@ -235,8 +240,9 @@ def trailer_guide_path(
                 and not _straight_between(check, s0, sg):
             raise PlanningError(
                 f"the {what}'s trailer pose admits no turn of the car at rest to the hitch "
-                f"angle +-{phi_g:.3g} of the trailer guide (its body would leave the free "
-                "space): the guide's curves cannot start or end there")
+                f"angle +-{phi_g:.3g} of the trailer guide ("
+                + "; ".join(_turn_failure(checker, check, d, margin, t) for t in turns)
+                + "): the guide's curves cannot start or end there")
     motion = functools.partial(_validator, check, phi_g, geometry.radius)
     found = guide_path(_stand_in(checker, geometry), s0, sg, seconds, seed, resolution,
                        valid=check, motion=motion)
@@ -244,6 +250,19 @@ def trailer_guide_path(
     points[0], points[-1] = np.asarray(x0, dtype=float), np.asarray(xg, dtype=float)
     return GuidePath(tuple(tuple(float(c) for c in p) for p in points), found.length,
                      found.length_history, found.radius)
+
+
+def _turn_failure(checker: Checker, check: Callable[[np.ndarray], np.ndarray], hitch: float,
+                  margin: float, turn: np.ndarray) -> str:
+    """Why the car's turn at rest ``turn`` (rows ``(x1, y1, θ1, φ)``) is not admissible, in
+    words: the first hitch angle that fails and what fails there (a limit, an obstacle, the
+    car touching its trailer, or only the guide's ``margin`` from an obstacle)."""
+    bad = np.flatnonzero(~check(turn))
+    row = turn[int(bad[0])] if bad.size else turn[-1]
+    why = checker.why_invalid(from_car(row, hitch))
+    if not why:
+        why = f"it comes within the guide's margin {margin:g} of an obstacle"
+    return f"at theta0 - theta1 = {row[3]:.3g}, {why}"
 
 
 def _straight_between(check: Callable[[np.ndarray], np.ndarray], s0: np.ndarray,
