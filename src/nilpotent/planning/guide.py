@@ -10,7 +10,9 @@ the car can follow exactly.
 
 1. **Search** (:func:`guide_path`): OMPL RRT* (path length; after its first path it
    improves it for :data:`IMPROVE_FRACTION` of its time, at most :data:`IMPROVE_SECONDS`,
-   and never past :data:`IMPROVE_FRACTION` of its time from the start;
+   and never past :data:`IMPROVE_FRACTION` of its time from the start; the tree grows
+   from the end with the smaller clearance, the goal in a parking slot: the reversed path
+   is a Reeds–Shepp path too;
    a tree with no path after :data:`RESTART_SECONDS` is cleared and grown anew)
    in ``ob.ReedsSheppStateSpace(r_g)``, ``r_g = L / tan φ_g`` with
    ``φ_g = φ_max −`` :data:`PHI_MARGIN` (0.56 % above the car's least turning radius),
@@ -297,8 +299,12 @@ def guide_path(
             raise PlanningError(f"the {what}'s pose is not admissible for every steering angle "
                                 f"|phi| <= {phi_g:.3g} of the Reeds-Shepp guide"
                                 + (f" (at phi = {row[3]:.3g}, {why})" if why else ""))
+    # grown from the tighter end (the path is reversible: a Reeds-Shepp curve driven
+    # backwards is one); only where OMPL checks poses alone, not a motion validator's
+    # direction-dependent lifted motions
+    backward = validator is None and bool(_clearance(checker, xg) < _clearance(checker, x0))
     pdef = ob.ProblemDefinition(si)
-    pdef.setStartAndGoalStates(start, goal)
+    pdef.setStartAndGoalStates(*((goal, start) if backward else (start, goal)))
     pdef.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
     planner = og.RRTstar(si)
     planner.setProblemDefinition(pdef)
@@ -323,6 +329,10 @@ def guide_path(
         path.interpolate(max(2, math.ceil(length / SAMPLE_STEP) + 1))
         poses = np.array([[s.getX(), s.getY(), s.getYaw()]
                           for s in (path.getState(i) for i in range(path.getStateCount()))])
+        if backward:  # the same curves, driven from the start
+            poses = poses[::-1]
+            if legs is not None:
+                legs = [Leg(leg.kappa, -leg.length) for leg in reversed(legs)]
     finally:
         # break the references between Python objects and OMPL's (no leak at exit)
         planner.clear()
@@ -338,6 +348,11 @@ def guide_path(
         points = lift(poses, x0, xg, car.wheelbase, radius)
     return GuidePath(tuple(tuple(float(c) for c in p) for p in points), length,
                      tuple(history), radius)
+
+
+def _clearance(checker: Checker, q: np.ndarray) -> float:
+    """The clearance of the pose ``q[:3]`` with ``φ = 0`` (``+inf`` without a world)."""
+    return float(checker.measures(np.array([[*np.asarray(q, float)[:3], 0.0]]))[0][0])
 
 
 def edge_poses(space: Any, a: Any, b: Any) -> np.ndarray:
