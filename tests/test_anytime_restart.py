@@ -83,3 +83,22 @@ def test_no_restart_after_a_first_solution(clock):
     history = hp.anytime_solve(planner, pdef, 60.0, 5.0, "a path", restart=1.0)
     assert planner.trees == 1 and pdef.cleared == 0
     assert history[-1][0] == pytest.approx(hp.SLICE_SECONDS + 5.0)
+
+
+def test_improvement_stops_at_improve_by(clock):
+    """A first path found late (third tree, after 4.25 s) is improved only until
+    ``improve_by`` seconds from the start, not ``improve`` seconds after it: the stages
+    after the search keep their time."""
+    planner = _Planner(clock, solve_on=3)
+    history = hp.anytime_solve(planner, _Pdef(planner), 60.0, 30.0, "a path", restart=2.0,
+                               improve_by=6.0)
+    assert history[0][0] == pytest.approx(4.0 + hp.SLICE_SECONDS)
+    assert history[-1][0] == pytest.approx(6.0)
+    assert clock.t == pytest.approx(6.0)
+
+
+def test_improve_by_before_the_first_path_does_not_stop_the_search(clock):
+    planner = _Planner(clock, solve_on=3)
+    history = hp.anytime_solve(planner, _Pdef(planner), 60.0, 30.0, "a path", restart=2.0,
+                               improve_by=1.0)
+    assert len(history) == 1 and history[0][0] == pytest.approx(4.0 + hp.SLICE_SECONDS)

@@ -213,3 +213,31 @@ def test_guide_path_in_the_open_is_driven_exactly_to_the_goal():
         assert piece is not None
         x = np.array(piece.reached)
     assert np.allclose(x, xg, atol=1e-8)
+
+
+def test_guide_grown_from_a_goal_in_the_slot_is_driven_from_the_start():
+    """A goal in the parking slot (less clearance than the start): the search grows from the
+    goal and the path is reversed (each leg's curvature kept, its signed length negated).
+    The waypoints, driven piece by piece by the exact flows from the start, end at the goal,
+    and every waypoint and dense sample of each leg is admissible (independent check: the
+    checker on the configurations the closed-form legs pass through)."""
+    pytest.importorskip("ompl")
+    from nilpotent.models import get_model
+    from nilpotent.planning.guide import exact_piece, guide_path
+    from nilpotent.planning.verify import Checker
+    from nilpotent.planning.world import load_world
+
+    system = get_model("car")
+    checker = Checker(system, load_world("parking"))
+    x0, xg = np.array([-2.0, 1.0, 0.0, 0.0]), np.array([1.0, -0.55, 0.0, 0.0])
+    assert checker.measures(xg[None])[0][0] < checker.measures(x0[None])[0][0]
+    guide = guide_path(checker, x0, xg, seconds=8.0, seed=3)
+    pts = [np.array(p) for p in guide.points]
+    assert np.array_equal(pts[0], x0) and np.array_equal(pts[-1], xg)
+    assert np.all(checker.valid(np.array(pts)))
+    x = x0
+    for prev, w in itertools.pairwise(pts):
+        piece = exact_piece(checker, x, prev, w, 1e-8, 20, WHEELBASE)
+        assert piece is not None
+        x = np.array(piece.reached)
+    assert np.allclose(x, xg, atol=1e-8)

@@ -149,7 +149,9 @@ def _print_plan(glob) -> None:
         f"route {glob.route}: {len(glob.waypoints)} waypoint(s), {len(glob.pieces)} piece(s)"
         + (f", world {literal(glob.world.name)}" if glob.world is not None else "")
     )
-    lim = ", ".join(f"{k} in [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in glob.limits.as_dict().items())
+    # the relative limits too (a hitch angle): "none" only where nothing is limited
+    lim = ", ".join(f"{literal(k)} in [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in
+                    [*glob.limits.as_dict().items(), *glob.limits.relative_dict().items()])
     console.print(f"limits: {lim or 'none'}; limits kept: {v.limits_ok}")
     if v.clearance is not None:
         console.print(f"clearance to obstacles: {v.clearance:.4g}")

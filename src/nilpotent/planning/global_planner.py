@@ -93,7 +93,7 @@ MAX_PIECES = 10_000
 CHECK_POINTS = 40
 VERIFY_POINTS = 100
 #: Samples per segment of the second, denser check of a piece whose samples are all
-#: admissible but whose margins between samples (half a step) were too wide.
+#: admissible but whose cover between samples (Checker.valid_motion) was too wide.
 DENSE_CHECK_POINTS = 200
 #: The direct attempt (one nilpotent plan, the old behaviour) is made for goals this close
 #: (configuration-space Euclidean distance).
@@ -373,7 +373,7 @@ def steer_admissible(
     if not np.all(checker.valid(states)):
         return None
     # every sample is admissible, only the cover of the motion between samples (margins
-    # of half a step) failed: sample more densely (smaller steps, smaller margins)
+    # from its steps and bends) failed: sample more densely (smaller steps, smaller covers)
     _, dense = simulate_path(system, x, list(p.segments), DENSE_CHECK_POINTS,
                              options.get("settings", PLANNING_SETTINGS))
     if not checker.valid_motion(dense):
@@ -671,8 +671,7 @@ def _plan_global(
                 if not targets or not _chord_valid(checker.valid, x, targets[0][0]):
                     raise PlanningError(
                         f"cannot steer back onto the path at {np.array2string(w, precision=3)} "
-                        f"from {off:.3g} away inside the free space and limits"
-                    )
+                        f"from {off:.3g} away ({checker.constraints_near(x)})")
                 prev = x.copy()
                 continue
             if off > max(tol, MID_TOL_FRACTION * length):
@@ -680,10 +679,9 @@ def _plan_global(
                 targets.appendleft((prev.copy(), halvings))
                 continue
             if length < MIN_PIECE:
-                raise PlanningError(
-                    f"cannot steer inside the free space and limits near "
-                    f"{np.array2string(w, precision=3)}: pieces down to {MIN_PIECE:g} fail"
-                )
+                raise PlanningError(  # what constrains the motion there, not a guess
+                    f"cannot steer near {np.array2string(w, precision=3)}: pieces down to "
+                    f"{MIN_PIECE:g} fail ({checker.constraints_near(x)})")
             targets.appendleft(((prev + w) / 2, halvings + 1))
             continue
         targets.popleft()

@@ -9,7 +9,10 @@ Math. 145(2), 1990): this stage plans with them and hands the steering pieces
 the car can follow exactly.
 
 1. **Search** (:func:`guide_path`): OMPL RRT* (path length; after its first path it
-   improves it for :data:`IMPROVE_FRACTION` of its time, at most :data:`IMPROVE_SECONDS`;
+   improves it for :data:`IMPROVE_FRACTION` of its time, at most :data:`IMPROVE_SECONDS`,
+   and never past :data:`IMPROVE_FRACTION` of its time from the start; the tree grows
+   from the end with the smaller clearance, the goal in a parking slot: the reversed path
+   is a Reeds–Shepp path too;
    a tree with no path after :data:`RESTART_SECONDS` is cleared and grown anew)
    in ``ob.ReedsSheppStateSpace(r_g)``, ``r_g = L / tan φ_g`` with
    ``φ_g = φ_max −`` :data:`PHI_MARGIN` (0.56 % above the car's least turning radius),
@@ -99,7 +102,11 @@ WAYPOINT_STEP = 0.25
 PHI_STEP = 0.1
 #: Share of its time RRT* spends improving its first path, at most :data:`IMPROVE_SECONDS`
 #: (benchmarks/plan_world.py, 30 s per query, the stage's 0.8 of it: about 11 s of
-#: improvement, within 1.02 × Reeds–Shepp RRT* run for the whole 30 s on 8 pairs).
+#: improvement, within 1.02 × Reeds–Shepp RRT* run for the whole 30 s on 8 pairs).  The
+#: improvement also stops at that fraction of the time counted from the search's start: on
+#: a loaded machine (load 6-8 on 2 cores) a late first path plus 11 s of improvement left
+#: too little of 30 s for driving the legs and the verification (6 of 6 corner pairs ran
+#: out of time re-simulating; with 30 s on a quieter machine, 17-18 s in all).
 IMPROVE_FRACTION = 0.5
 IMPROVE_SECONDS = 15.0
 #: Seconds of RRT* without a first path after which its tree is cleared and grown anew
@@ -244,6 +251,7 @@ def guide_path(
     car = car_geometry(checker.system, checker)
     phi_g = car.phi_max - PHI_MARGIN
     radius = car.wheelbase / math.tan(phi_g)
+    own = valid is None  # the model's own configurations are checked (not a stand-in's)
     if valid is None:
         # the margin unless the start or the goal lacks it (a car parked close to a wall)
         ends = np.array([[*q[:3], phi] for q in (x0, xg) for phi in (-phi_g, 0.0, phi_g)])
@@ -278,12 +286,20 @@ def guide_path(
         st.setX(float(q[0]))
         st.setY(float(q[1]))
         st.setYaw(float(q[2]))
-    for what, st in (("start", start), ("goal", goal)):
+    for what, st, q in (("start", start, x0), ("goal", goal, xg)):
         if not pose_valid(st):
+            rows = np.array([[*q[:3], p] for p in steer])
+            row = rows[int(np.flatnonzero(~is_valid(rows))[0])]
+            why = (checker.why_invalid(row) or "it comes within the guide's margin "
+                   f"{GUIDE_MARGIN:g} of an obstacle") if own else ""
             raise PlanningError(f"the {what}'s pose is not admissible for every steering angle "
-                                f"|phi| <= {phi_g:.3g} of the Reeds-Shepp guide")
+                                f"|phi| <= {phi_g:.3g} of the Reeds-Shepp guide"
+                                + (f" (at phi = {row[3]:.3g}, {why})" if why else ""))
+    # grown from the tighter end (the path is reversible: a Reeds-Shepp curve driven
+    # backwards is one; OMPL checks poses alone here)
+    backward = bool(_clearance(checker, xg) < _clearance(checker, x0))
     pdef = ob.ProblemDefinition(si)
-    pdef.setStartAndGoalStates(start, goal)
+    pdef.setStartAndGoalStates(*((goal, start) if backward else (start, goal)))
     pdef.setOptimizationObjective(ob.PathLengthOptimizationObjective(si))
     planner = og.RRTstar(si)
     planner.setProblemDefinition(pdef)
@@ -292,7 +308,8 @@ def guide_path(
     improve = min(IMPROVE_FRACTION * seconds, IMPROVE_SECONDS)
     try:
         history = anytime_solve(planner, pdef, seconds, improve,
-                                f"a Reeds-Shepp path (radius {radius:.3g})", RESTART_SECONDS)
+                                f"a Reeds-Shepp path (radius {radius:.3g})", RESTART_SECONDS,
+                                improve_by=IMPROVE_FRACTION * seconds)
         solution: Any = pdef.getSolutionPath()  # a geometric path (the stubs say Path)
         path: Any = og.PathGeometric(solution)
         og.PathSimplifier(si).simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))
@@ -307,6 +324,10 @@ def guide_path(
         path.interpolate(max(2, math.ceil(length / SAMPLE_STEP) + 1))
         poses = np.array([[s.getX(), s.getY(), s.getYaw()]
                           for s in (path.getState(i) for i in range(path.getStateCount()))])
+        if backward:  # the same curves, driven from the start
+            poses = poses[::-1]
+            if legs is not None:
+                legs = [Leg(leg.kappa, -leg.length) for leg in reversed(legs)]
     finally:
         # break the references between Python objects and OMPL's (no leak at exit)
         planner.clear()
@@ -322,6 +343,11 @@ def guide_path(
         points = lift(poses, x0, xg, car.wheelbase, radius)
     return GuidePath(tuple(tuple(float(c) for c in p) for p in points), length,
                      tuple(history), radius)
+
+
+def _clearance(checker: Checker, q: np.ndarray) -> float:
+    """The clearance of the pose ``q[:3]`` with ``φ = 0`` (``+inf`` without a world)."""
+    return float(checker.measures(np.array([[*np.asarray(q, float)[:3], 0.0]]))[0][0])
 
 
 def edge_poses(space: Any, a: Any, b: Any, step: float = LEG_SAMPLE_STEP) -> np.ndarray:
@@ -621,8 +647,8 @@ def exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray
     d = w - prev
     if float(np.abs(d[:3]).max()) <= AT_REST:
         u = (0.0, float(w[3] - x[3]))
-        # the motion check covers the steps between samples by half a step of φ: a turn
-        # ending at ±φ_g must take steps of at most 2 PHI_MARGIN
+        # φ is linear in time (the limit's cover is exact), the wheels' outline turns on
+        # arcs: steps of at most PHI_MARGIN keep that cover small
         points = max(points, math.ceil(abs(u[1]) / PHI_MARGIN) + 1)
     elif abs(float(d[3])) <= AT_REST:
         kappa = math.tan(float(prev[3])) / wheelbase

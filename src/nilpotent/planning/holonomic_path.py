@@ -178,10 +178,13 @@ def ompl_path(
 
 
 def anytime_solve(planner: Any, pdef: Any, seconds: float, improve: float,
-                  what: str, restart: float | None = None) -> list[tuple[float, float]]:
+                  what: str, restart: float | None = None,
+                  improve_by: float | None = None) -> list[tuple[float, float]]:
     """Run an OMPL optimising planner in slices of :data:`SLICE_SECONDS` until ``seconds``,
-    or ``improve`` seconds after its first exact solution; ``[(seconds, best cost)]`` after
-    each slice with a solution (the budget is checked before each slice).  ``restart``:
+    or ``improve`` seconds after its first exact solution, or (when given) ``improve_by``
+    seconds after the start once it has one (the improvement never eats the time that the
+    stages after the search need); ``[(seconds, best cost)]`` after each slice with a
+    solution (the budget is checked before each slice).  ``restart``:
     the tree is cleared (``planner.clear()``: a new tree, from the RNG's next numbers) after
     each ``restart`` seconds without an exact solution (a tree can stall at a narrow goal,
     retrying the same failing edges from the same nearest vertices).
@@ -201,6 +204,8 @@ def anytime_solve(planner: Any, pdef: Any, seconds: float, improve: float,
         left = seconds - spent
         if first is not None:
             left = min(left, first + improve - spent)
+            if improve_by is not None:
+                left = min(left, improve_by - spent)
         elif restart is not None and now - tree >= restart and left >= SLICE_SECONDS:
             planner.clear()
             pdef.clearSolutionPaths()

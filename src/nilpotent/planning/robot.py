@@ -155,10 +155,11 @@ class Robot:
         return d.min(axis=1)
 
     def self_collides(self, q: np.ndarray, parts: tuple[np.ndarray, np.ndarray] | None = None,
-                      margin: float = 0.0) -> np.ndarray:
+                      margin: float | np.ndarray = 0.0) -> np.ndarray:
         """Boolean ``(N,)``: two parts that must not touch are closer than ``margin`` (or touch,
         or overlap): :meth:`self_clearance` ``≤ margin``, by shapely's predicates
-        (``intersects`` where the distance allowed is 0, ``dwithin`` elsewhere)."""
+        (``intersects`` where the distance allowed is 0, ``dwithin`` elsewhere).  ``margin``
+        may be an ``(N, 1)`` array, one value per configuration."""
         pairs = self._pairs  # type: ignore[attr-defined]
         q = np.atleast_2d(np.asarray(q, dtype=float))
         if not pairs.size:

@@ -144,17 +144,22 @@ def trailer_geometry(system: ControlSystem, checker: Checker) -> TrailerGeometry
         if name in ("theta0", "theta1"):
             raise OptionError(f"--planner reeds-shepp: the trailer guide takes no limit on "
                               f"{name} (only on theta0 - theta1)")
-    for _, expr, lo_r, hi_r in checker.limits.relative:
-        if sp.simplify(expr - (th0 - th1)) == 0:
+    # linear relative limits are normalised where they are made (Limits): every form of the
+    # hitch angle (2*theta0 - 2*theta1, theta1 - theta0, ...) is theta0 - theta1 here
+    other = []
+    for label, expr, lo_r, hi_r in checker.limits.relative:
+        if sp.expand(expr - (th0 - th1)) == 0:
             lo, hi = max(lo, lo_r), min(hi, hi_r)
-        elif sp.simplify(expr + (th0 - th1)) == 0:
-            lo, hi = max(lo, -hi_r), min(hi, -lo_r)
+        elif expr.free_symbols & {th0, th1}:
+            other.append(label)
     phi_max = min(-lo, hi)
     if not (PHI_MARGIN < phi_max < math.pi / 2):
+        unread = (f" (the guide reads the hitch limit only from a linear one, a*(theta0 - "
+                  f"theta1) + b; not from {', '.join(map(repr, other))})" if other else "")
         raise OptionError(
             f"--planner reeds-shepp needs a hitch limit |theta0 - theta1| <= phi_max with "
             f"{PHI_MARGIN:g} < phi_max < pi/2; "
-            f"model {system.name} has theta0 - theta1 in [{lo:g}, {hi:g}]")
+            f"model {system.name} has theta0 - theta1 in [{lo:g}, {hi:g}]{unread}")
     return TrailerGeometry(hitch, phi_max)
 
 
@@ -345,8 +350,9 @@ def trailer_guide_path(
         if not any(admitted(t) for t in turns) and not _straight_between(admitted, d, s0, sg):
             raise PlanningError(
                 f"the {what}'s trailer pose admits no turn of the car at rest to the hitch "
-                f"angle +-{phi_g:.3g} of the trailer guide (its body would leave the free "
-                "space): the guide's curves cannot start or end there")
+                f"angle +-{phi_g:.3g} of the trailer guide ("
+                + "; ".join(_turn_failure(checker, kept, d, margin, t) for t in turns)
+                + "): the guide's curves cannot start or end there")
     return _search(checker, kept, geometry, s0, sg, seconds, seed, (x0, xg))
 
 
@@ -536,6 +542,22 @@ def _lifted(checker: Checker, hitch: float, radius: float, space: Any,
     if not _admitted(checker, hitch, pieces):
         return None
     return points, sum(abs(leg.length) for leg in legs)
+
+
+def _turn_failure(checker: Checker, kept: Checker, hitch: float, margin: float,
+                  pieces: Sequence[np.ndarray]) -> str:
+    """Why the car's turn at rest ``pieces`` (:func:`motion_pieces`) is not admissible, in
+    words: the first hitch angle that fails under ``kept`` (the checker with the guide's
+    margin) and what fails there under ``checker`` (a limit, an obstacle, the car touching
+    its trailer), else only the guide's ``margin`` or the cover between samples."""
+    turn = np.concatenate(pieces)
+    bad = np.flatnonzero(~kept.valid(from_car(turn, hitch)))
+    row = turn[int(bad[0])] if bad.size else turn[-1]
+    why = checker.why_invalid(from_car(row, hitch))
+    if not why:
+        why = (f"it comes within the guide's margin {margin:g} of an obstacle" if bad.size
+               else "the motion between its samples comes too close")
+    return f"at theta0 - theta1 = {row[3]:.3g}, {why}"
 
 
 def _straight_between(admitted: Callable[[list[np.ndarray]], bool], hitch: float,

@@ -31,7 +31,11 @@ from nilpotent.planning.robot import Robot, singular_margin_function
 from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.world import World
 
-__all__ = ["Checker", "Verification", "verify_segments", "verify_states"]
+__all__ = ["NEAR", "Checker", "Verification", "verify_segments", "verify_states"]
+
+#: How near a constraint must be to be named by :meth:`Checker.constraints_near` (model
+#: units / radians): about the reach of a steered piece of the shortest length.
+NEAR = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,8 +105,8 @@ class Checker:
         return clear, lim, sing
 
     def valid(
-        self, q: np.ndarray, extra_clearance: float = 0.0, limit_slack: float = 0.0,
-        self_slack: float = 0.0,
+        self, q: np.ndarray, extra_clearance: float | np.ndarray = 0.0,
+        limit_slack: float = 0.0, self_slack: float | np.ndarray = 0.0,
     ) -> np.ndarray:
         """Boolean ``(N,)``: every limit holds, no contact, singular margin kept.
 
@@ -110,9 +114,12 @@ class Checker:
         limit margin ``≥ 0``, singular margin ``≥ self.singular_margin``), with
         shapely's predicates instead of distances (faster).  ``extra_clearance``
         (obstacles), ``limit_slack`` (limits) and ``self_slack`` (distance between bodies
-        that must not touch) demand more (used to cover the motion between samples).
+        that must not touch) demand more (the first and last may be ``(N,)`` arrays, one
+        value per configuration: :meth:`valid_motion`).
         """
         q = np.atleast_2d(np.asarray(q, dtype=float))
+        extra = np.broadcast_to(np.asarray(extra_clearance, dtype=float), q.shape[:1])
+        self_extra = np.broadcast_to(np.asarray(self_slack, dtype=float), q.shape[:1])
         ok = np.all(np.isfinite(q), axis=1)
         ok &= self.robot.limit_margin(q) >= limit_slack  # type: ignore[attr-defined]
         if self.margin_fn is not None:  # type: ignore[attr-defined]
@@ -123,11 +130,11 @@ class Checker:
             parts = robot.parts(q[ok])
             hit = np.zeros(parts[0].shape[0], dtype=bool)
             if selfish:
-                hit |= robot.self_collides(q[ok], parts, self_slack)
+                hit |= robot.self_collides(q[ok], parts, self_extra[ok][:, None])
             if self.world is not None:
                 geoms, radii = parts
                 hit |= self.world.collides(geoms, radii,
-                                           self.clearance + extra_clearance).any(axis=1)
+                                           self.clearance + extra[ok][:, None]).any(axis=1)
             ok[np.flatnonzero(ok)[hit]] = False
         return ok
 
@@ -136,39 +143,98 @@ class Checker:
         self-collision; ``+inf`` where the model names no such pair)."""
         return self.robot.self_clearance(q)  # type: ignore[attr-defined]
 
+    def limit_values(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The limited quantities at ``q (N, n)`` and their bounds: ``(values (N, K), lo (K,),
+        hi (K,))``, the box-limited coordinates then the relative-limit expressions (NaN
+        where an expression is not defined)."""
+        q = np.atleast_2d(np.asarray(q, dtype=float))
+        names = self.system.coordinate_names
+        assert self.limits is not None
+        cols = [names.index(k) for k, _, _ in self.limits.bounds]
+        values = np.concatenate([q[:, cols],
+                                 self.robot.relative_values(q)], axis=1)  # type: ignore[attr-defined]
+        lo = np.array([b[1] for b in self.limits.bounds]
+                      + [r[2] for r in self.limits.relative], dtype=float)
+        hi = np.array([b[2] for b in self.limits.bounds]
+                      + [r[3] for r in self.limits.relative], dtype=float)
+        return values, lo, hi
+
     def valid_motion(self, states: np.ndarray) -> bool:
-        """Every sample of a motion ``(N, n)`` admissible, with margins that cover the
-        motion between consecutive samples: half the largest step of a limited
-        coordinate or relative-limit expression (limits), half the largest displacement
-        of an outline point (clearance), the whole of it (self-collision: two parts may
-        approach each other).  Exact for straight motion between samples, a first-order
-        cover otherwise; the whole plan is re-verified more densely anyway.
+        r"""Whether a motion sampled at ``states (N, n)`` (consecutive samples of one
+        continuous motion, evenly spaced in time within each segment) is admissible
+        between its samples too.
+
+        Every sample must be admissible (:meth:`valid`).  Between two consecutive samples
+        ``i, i + 1`` the motion is covered interval by interval, so that a motion that
+        starts or ends exactly on a limit (margin 0) and stays inside is admitted, and one
+        that leaves the limits or the free space between samples is not:
+
+        * **What bounds the motion between samples.**  For a quantity ``g(t)`` of the
+          motion (a limited coordinate, a relative-limit expression, a coordinate of an
+          outline point), twice differentiable with ``|g''| ≤ M`` on ``[t_i, t_{i+1}]``
+          (``h`` apart), the interpolation error gives, at ``t = t_i + s h``,
+          ``|g(t) − ((1 − s) g_i + s g_{i+1})| ≤ s (1 − s) E`` with ``E = h² M / 2``.
+          ``E`` is estimated from the samples as the larger second difference
+          ``|g_{j+1} − 2 g_j + g_{j−1}| ≈ h² |g''(t_j)|`` at the interval's two ends
+          (a factor 2 above ``h² |g''| / 2``: sound while ``|g''|`` varies by less than a
+          factor 2 over two steps, i.e. while the samples resolve the motion; two samples
+          alone: ``E`` is their step).
+        * **Limits** (per bound, per interval): with the margins ``a = m_i, b = m_{i+1} ≥ 0``
+          of the samples to that bound, the margin at ``s`` is at least
+          ``(1 − s) a + s b − s (1 − s) E``, non-negative for every ``s ∈ [0, 1]`` iff
+          ``√a + √b ≥ √E``: the test made.  A motion linear between samples (``E = 0``)
+          needs only its samples inside; one starting on a bound needs the next sample
+          ``E`` inside it.
+        * **Obstacles and self-collision**: the distance from a part to an obstacle is
+          1-Lipschitz in its points, and every point of a part (a fixed convex
+          combination of its vertices, or a disc's centre) moves between the samples
+          along a path no longer than ``ℓ_i``, the largest displacement of a vertex or
+          centre plus its ``E`` (a path's excess over its chord is at most ``h² M / 3``).
+          A point at path length ``α`` from sample ``i`` is then within ``α`` of it and
+          ``ℓ_i − α`` of sample ``i + 1``, so the clearance there is at least
+          ``(d_i + d_{i+1} − ℓ_i) / 2``: each sample is required to keep ``ℓ / 2`` more
+          than :attr:`clearance` (``ℓ`` the larger of its two intervals'), and between
+          two parts that must not touch (both may move) ``ℓ``.
+
+        The whole plan is verified again by a dense re-simulation (:func:`verify_segments`).
         """
         q = np.atleast_2d(np.asarray(states, dtype=float))
-        slack = extra = 0.0
-        if len(q) > 1:
-            names = self.system.coordinate_names
-            assert self.limits is not None
-            cols = [names.index(k) for k, _, _ in self.limits.bounds]
-            if cols:
-                slack = 0.5 * float(np.abs(np.diff(q[:, cols], axis=0)).max())
-            if self.limits.relative:
-                g = self.robot.relative_values(q)  # type: ignore[attr-defined]
-                slack = max(slack, 0.5 * float(np.nan_to_num(
-                    np.abs(np.diff(g, axis=0)), nan=np.inf).max()))
-            if self.world is not None or self.robot.has_self_collision:  # type: ignore[attr-defined]
-                pts = self.robot.points(q)  # type: ignore[attr-defined]
-                moved = [np.diff(p, axis=0) for p in pts["polygons"]]
-                moved += [np.diff(pts["segments"], axis=0), np.diff(pts["discs"], axis=0)]
-                extra = 0.5 * max(
-                    (float(np.linalg.norm(m, axis=-1).max()) for m in moved if m.size),
-                    default=0.0,
-                )
-        # two parts may approach each other: twice the cover of one part's motion
-        return bool(np.all(self.valid(q, extra, slack, 2.0 * extra)))
+        robot: Robot = self.robot  # type: ignore[attr-defined]
+        if len(q) < 2 or (self.world is None and not robot.has_self_collision):
+            if not np.all(self.valid(q)):
+                return False
+            if len(q) < 2:
+                return True
+        assert self.limits is not None
+        if self.limits:
+            g, lo, hi = self.limit_values(q)
+            if not np.all(np.isfinite(g)):
+                return False
+            bend = _bend(g)
+            for m in (g - lo, hi - g):
+                root = np.sqrt(np.maximum(m, 0.0))
+                if not np.all(root[:-1] + root[1:] >= np.sqrt(bend)):
+                    return False
+        if self.world is None and not robot.has_self_collision:
+            return True
+        pts = robot.points(q)
+        arrays = [*pts["polygons"], pts["segments"].reshape(len(q), -1, 2), pts["discs"]]
+        steps = np.zeros(len(q) - 1)
+        for a in arrays:
+            if a.size:
+                moved = np.linalg.norm(np.diff(a, axis=0), axis=-1)  # (N - 1, P)
+                bent = np.linalg.norm(_bend(a.reshape(len(q), -1)).reshape(*moved.shape, 2),
+                                      axis=-1)
+                steps = np.maximum(steps, (moved + bent).max(axis=1))
+        if not np.all(np.isfinite(steps)):
+            return False
+        cover = np.maximum(np.r_[steps, 0.0], np.r_[0.0, steps])  # each sample's two intervals
+        return bool(np.all(self.valid(q, 0.5 * cover, 0.0, cover)))
 
     def why_invalid(self, q: Sequence[float] | State) -> str:
         """One sentence saying why the configuration ``q`` is not admissible ('' if it is)."""
+        if not np.all(np.isfinite(np.asarray(q, dtype=float))):
+            return "its coordinates are not all finite numbers (the motion diverged)"
         clear, lim, sing = (float(v[0]) for v in self.measures(np.asarray(q)[None, :]))
         reasons = []
         if not clear > self.clearance:  # NaN: not seen as free
@@ -191,6 +257,33 @@ class Checker:
         if self.margin_fn is not None and sing < self.singular_margin:  # type: ignore[attr-defined]
             reasons.append(f"singular margin {sing:.3g} below {self.singular_margin:g}")
         return "; ".join(reasons)
+
+    def constraints_near(self, q: Sequence[float] | State, within: float = NEAR) -> str:
+        """What constrains the configuration ``q`` within ``within`` (model units / radians),
+        in words: the limits whose margin is at most ``within`` (``"phi = 0.3 is 0 from its
+        bound 0.3"``), the clearance to the obstacles, the self-clearance, the singular
+        margin; ``"nothing within …"`` when none is that near (then the steering itself,
+        not a constraint, failed there).  For refusals that must not blame the wrong thing.
+        """
+        row = np.asarray(q, dtype=float)[None, :]
+        clear, _, sing = (float(v[0]) for v in self.measures(row))
+        out = []
+        if self.limits:
+            g, lo, hi = self.limit_values(row)
+            labels = [k for k, _, _ in self.limits.bounds] + [k for k, *_ in self.limits.relative]
+            for label, v, a, b in zip(labels, g[0], lo, hi, strict=True):
+                bound = a if abs(v - a) <= abs(b - v) else b
+                if not abs(v - bound) > within:  # NaN: named too
+                    off = "on" if v == bound else f"{abs(v - bound):.2g} from"
+                    out.append(f"{label} = {v:.4g} is {off} its bound {bound:.4g}")
+        if self.world is not None and not clear - self.clearance > within:
+            out.append(f"the clearance to the obstacles is {clear:.2g}")
+        self_clear = float(self.self_clearance(row)[0])
+        if not self_clear > within:
+            out.append(f"two bodies are {self_clear:.2g} apart")
+        if self.margin_fn is not None and not sing - self.singular_margin > within:  # type: ignore[attr-defined]
+            out.append(f"the singular margin is {sing:.2g}")
+        return "; ".join(out) or f"no limit, obstacle or body within {within:g} there"
 
     def _self_pair(self, q: Sequence[float] | State) -> str:
         """The first pair of bodies in contact at ``q``, in words."""
@@ -273,6 +366,17 @@ def verify_states(
         self_clearance=float(self_clear.min()) if self_clear is not None else None,
         self_collision_ok=bool(self_clear is None or np.all(self_clear > 0)),
     )
+
+
+def _bend(values: np.ndarray) -> np.ndarray:
+    """Per interval of ``values (N, K)`` (``N ≥ 2``), the larger absolute second difference at
+    its two ends, ``(N − 1, K)`` (:meth:`Checker.valid_motion`: it estimates ``h² |g''|``);
+    with two samples, the step itself."""
+    if len(values) < 3:
+        return np.abs(np.diff(values, axis=0))
+    d2 = np.abs(values[2:] - 2.0 * values[1:-1] + values[:-2])  # at samples 1 .. N - 2
+    at = np.concatenate([d2[:1], d2, d2[-1:]])  # the ends take their neighbour's
+    return np.maximum(at[:-1], at[1:])
 
 
 def _outside(label: str, v: float, lo: float, hi: float) -> str:

@@ -153,12 +153,14 @@ class World:
         return out - radii
 
     def collides(
-        self, geoms: np.ndarray, radii: np.ndarray | float = 0.0, margin: float = 0.0
+        self, geoms: np.ndarray, radii: np.ndarray | float = 0.0,
+        margin: float | np.ndarray = 0.0,
     ) -> np.ndarray:
         """Boolean, same shape as ``geoms``: :meth:`clearance` ``≤ margin`` (contact, overlap,
         leaving the bounds, or closer than ``margin``), by shapely's predicates
         (``intersects`` on the prepared obstacles where the distance allowed is 0,
-        ``dwithin`` elsewhere) without computing distances."""
+        ``dwithin`` elsewhere) without computing distances.  ``margin`` may be an array
+        that broadcasts to ``geoms`` (``(N, 1)``: one value per configuration)."""
         geoms = np.asarray(geoms)
         reach = np.broadcast_to(np.asarray(radii, dtype=float) + margin, geoms.shape)
         out = np.zeros(geoms.shape, dtype=bool)

@@ -331,8 +331,12 @@ def system_from_dict(
         fields.append(tuple(components[c] for c in coord_names))
     limits = limits_from_dict(data.get("limits", {}), coord_names, source)
     if "relative_limits" in data:
-        limits = Limits(limits.bounds, relative_limits_from_dict(
-            data["relative_limits"], {c: names[c] for c in coord_names}, source))
+        relative = relative_limits_from_dict(data["relative_limits"],
+                                             {c: names[c] for c in coord_names}, source)
+        try:
+            limits = Limits(limits.bounds, relative)  # linear ones normalised (Limits)
+        except ModelError as exc:
+            raise ModelError(f"{source}: relative_limits: {exc}") from None
     geometry = outline_from_dict(data["geometry"], names, source) if "geometry" in data else None
     try:
         return ControlSystem(
@@ -376,7 +380,9 @@ def relative_limits_from_dict(
 
     The key is an expression of the safe grammar in the coordinates only (not the
     parameters: a limit stays the same when ``--param`` changes them); the bounds are
-    numbers or constant expressions.
+    numbers or constant expressions.  The limits are returned as given; :class:`Limits`
+    normalises the linear ones (``"2*theta0 - 2*theta1" = [-1.4, 1.4]`` is
+    ``theta0 - theta1`` in ``[-0.7, 0.7]``) and refuses two of the same quantity.
 
     Raises
     ------

@@ -29,10 +29,10 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from nilpotent.core.model.expressions import as_expr
+from nilpotent.core.model.expressions import as_expr, format_expression
 from nilpotent.errors import ModelError
 
-__all__ = ["Limits", "Outline"]
+__all__ = ["Limits", "Outline", "linear_form"]
 
 Point2 = tuple[sp.Expr, sp.Expr]
 
@@ -48,13 +48,18 @@ class Limits:
         units, radians for angles).
     relative:
         ``(label, expression, lo, hi)`` per relative limit: ``lo ≤ expression(q) ≤ hi``;
-        ``label`` is the text it was given as (``"theta0 - theta1"``), the expression a
-        sympy expression of the coordinates only.
+        the expression a sympy expression of the coordinates only.  A linear one is
+        normalised here, once, for every consumer (checker, guides, verification, output):
+        ``scale · e + offset`` in ``[lo, hi]`` becomes ``e`` in the bounds divided through
+        (:func:`linear_form`: ``"2*theta0 - 2*theta1" = [-1.4, 1.4]`` is
+        ``theta0 - theta1`` in ``[-0.7, 0.7]``) and ``label`` the text of ``e``; any other
+        keeps the text it was given as.
 
     Raises
     ------
     ModelError
-        A bound that is not finite, ``lo > hi``, or a name (label) given twice.
+        A bound that is not finite, ``lo > hi``, or a name (label) given twice, or two
+        relative limits of the same linear quantity.
 
     Examples
     --------
@@ -79,7 +84,7 @@ class Limits:
             seen.add(name)
             clean.append((str(name), lo, hi))
         object.__setattr__(self, "bounds", tuple(clean))
-        labels: set[str] = set()
+        given: dict[str, str] = {}  # key (normalised label) -> the label as given
         rel = []
         for label, expr, lo, hi in self.relative:
             lo, hi = float(lo), float(hi)
@@ -88,10 +93,19 @@ class Limits:
                 raise ModelError(f"{where}: bounds must be finite, got [{lo}, {hi}]")
             if lo > hi:
                 raise ModelError(f"{where}: lower bound {lo} is above upper bound {hi}")
-            if label in labels:
+            key, expr = str(label), as_expr(expr)
+            form = linear_form(expr)
+            if form is not None:  # one key per linear quantity, whatever its scale and offset
+                expr, scale, offset = form
+                lo, hi = sorted(((lo - offset) / scale, (hi - offset) / scale))
+                key = format_expression(expr)
+            if key in given and given[key] == label:
                 raise ModelError(f"{where} given twice")
-            labels.add(label)
-            rel.append((str(label), as_expr(expr), lo, hi))
+            if key in given:
+                raise ModelError(f"{where}: the same quantity as relative limit {given[key]!r} "
+                                 f"({key}, up to scale and offset); give it one limit")
+            given[key] = str(label)
+            rel.append((key, expr, lo, hi))
         object.__setattr__(self, "relative", tuple(rel))
 
     def __bool__(self) -> bool:
@@ -140,6 +154,41 @@ class Limits:
             if not used:
                 raise ModelError(f"{source}: relative limit {label!r} is a constant "
                                  "(it must depend on the coordinates)")
+
+
+def linear_form(expr: sp.Expr) -> tuple[sp.Expr, float, float] | None:
+    """``(e, scale, offset)`` with ``expr = scale · e + offset`` and ``e`` the normal form of
+    a linear quantity: ``Σ c_j x_j`` over its symbols, the coefficient of the first symbol
+    (by name) 1; ``None`` where ``expr`` is not affine in its symbols with real numeric
+    coefficients (``sin(theta0 - theta1)``: kept as given).
+
+    So ``2*theta0 - 2*theta1``, ``theta1 - theta0`` and ``theta0 - theta1 + 0`` all give
+    ``theta0 - theta1`` (scales 2, -1, 1), as every consumer of a relative limit reads it.
+
+    Examples
+    --------
+    >>> a, b = sp.symbols("theta0 theta1")
+    >>> linear_form(2 * b - 2 * a + 1)
+    (theta0 - theta1, -2.0, 1.0)
+    """
+    symbols = sorted(expr.free_symbols, key=str)
+    if not symbols:
+        return None
+    # affine iff every partial derivative is a number (no expansion: a power of a long sum
+    # is not multiplied out); one whose derivatives only cancel to numbers stays as given
+    coeffs = [sp.diff(expr, s) for s in symbols]
+    if any(c.free_symbols for c in coeffs):
+        return None
+    offset = expr.subs(dict.fromkeys(symbols, 0))
+    if not all(c.is_number and c.is_real and c.is_finite for c in [*coeffs, offset]):
+        return None
+    scale = coeffs[0]
+    if scale == 0:
+        return None
+    ratios = [c / scale for c in coeffs]
+    ratios = [sp.Integer(int(r)) if r.is_Float and float(r).is_integer() else r for r in ratios]
+    normal = sp.Add(*(r * s for r, s in zip(ratios, symbols, strict=True)))
+    return normal, float(scale), float(offset)
 
 
 #: Largest magnitude of a constant of an outline (that of a point's coordinate,
