@@ -9,24 +9,30 @@ obstacles off the robot are checked against the obstacles with shapely.
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 import shapely
+from typer.testing import CliRunner
 
+import nilpotent.cli.cmd_plan  # noqa: F401  (registers the command)
+from nilpotent.cli import app
 from nilpotent.errors import OptionError
 from nilpotent.models import get_model
 from nilpotent.planning.global_planner import plan_global
 from nilpotent.planning.robot import Robot
 from nilpotent.planning.trident_ocp import END_ROOM, BodyPathSteering, body_path_piece
 from nilpotent.planning.verify import Checker
-from nilpotent.planning.world import world_from_dict
+from nilpotent.planning.world import load_world, world_from_dict
 from replay import resimulate
 
 pytest.importorskip("casadi")
 
 LIMIT = 5 * math.pi / 6
+WORLDS = Path(__file__).resolve().parents[1] / "examples" / "worlds"
 
 
 def _json(segments):
@@ -105,19 +111,36 @@ def test_the_planner_refuses_another_model():
 
 
 @pytest.mark.slow
-def test_a_corridor_crossing_has_a_body_path_within_twice_the_holonomic_path():
+def test_cli_crossing_the_room_with_a_body_path_within_twice_the_holonomic_path(tmp_path):
+    """``nilpotent plan trident-snake --world room --planner trident-ocp``: through the
+    doorway of ``examples/worlds/room.toml``; the replay within the goal, the limits and
+    the world (shapely, the outline rebuilt from the replay), the body path ≤ 2× the
+    holonomic path (the waypoints' xy length)."""
+    start, goal = (0.0, 0.0, 0.0, 0, 0, 0), (8.0, -0.5, 0.5, 0, 0, 0)
+    result = CliRunner().invoke(app, [
+        "plan", "trident-snake", "--from", "x=0,y=0,theta=0", "--to",
+        "x=8,y=-0.5,theta=0.5", "--world", str(WORLDS / "room.toml"), "--planner",
+        "trident-ocp", "--tol", "1e-6", "--time-limit", "600", "--json"])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    assert out["planner"] == "trident-ocp" and out["route"] == "global"
     system = get_model("trident-snake")
-    world = world_from_dict({"name": "corridor", "bounds": {"x": [-6.0, 14.0],
-                                                            "y": [-2.2, 2.2]},
-                             "obstacles": []})
-    start, goal = (-3.0, 0.0, 0.0, 0, 0, 0), (5.0, 0.1, 0.5, 0, 0, 0)
-    g = plan_global(system, start, goal, 1e-6, world=world, planner="trident-ocp",
-                    time_limit=300, seed=0)
-    assert g.planner == "trident-ocp"
-    q = resimulate(system, start, _json(g.plan.segments), samples=20)
+    q = resimulate(system, start, out["segments"], samples=20)
     assert np.linalg.norm(q[-1] - np.array(goal)) < 1e-5
     assert np.abs(q[:, 3:]).max() <= LIMIT
-    holonomic = float(np.linalg.norm(np.diff(np.array(g.waypoints)[:, :2], axis=0),
+    pts = Robot(system).points(q)
+    world = load_world(WORLDS / "room.toml")
+    blocked = shapely.union_all([shapely.Polygon(p) for p in world.polygons]
+                                + [shapely.Point(c).buffer(r, 256) for c, r in world.discs])
+    legs = shapely.linestrings(pts["segments"].reshape(-1, 2, 2))
+    body = shapely.polygons(pts["polygons"][0])
+    assert not shapely.intersects(blocked, legs).any()
+    assert not shapely.intersects(blocked, body).any()
+    (xlo, xhi), (ylo, yhi) = world.bounds
+    wheels = pts["discs"].reshape(-1, 2)
+    assert np.all((wheels[:, 0] > xlo) & (wheels[:, 0] < xhi) & (wheels[:, 1] > ylo)
+                  & (wheels[:, 1] < yhi))
+    holonomic = float(np.linalg.norm(np.diff(np.array(out["waypoints"])[:, :2], axis=0),
                                      axis=1).sum())
-    body = float(np.linalg.norm(np.diff(q[:, :2], axis=0), axis=1).sum())
-    assert body <= 2.0 * holonomic
+    centre = float(np.linalg.norm(np.diff(q[:, :2], axis=0), axis=1).sum())
+    assert centre <= 2.0 * holonomic
