@@ -25,6 +25,9 @@ Methods, same time budget per query, same pairs:
   piece by piece, :mod:`nilpotent.planning.guide`; for one trailer, the path of the
   trailer as a car, :mod:`nilpotent.planning.trailer_guide`); every method prints the
   reason of a failure on stderr;
+* ``tocp`` (``trident-snake`` only): the same with ``planner="trident-ocp"`` (RRTConnect's
+  path, each piece driven by direct optimal control of the body path,
+  :mod:`nilpotent.planning.trident_ocp`);
 * ``rs`` (``car`` only): OMPL RRT* in ``ReedsSheppStateSpace(rmin)`` (``rmin`` the model's
   parameter), the same validity check (the car's outline with ``φ = 0``) at the
   resolution of OMPL's default; it runs the whole budget (anytime) and the time reported
@@ -48,7 +51,7 @@ world, 10 s each, the worlds ``corner,car-parking,corridor,parking,parking2`` an
 before timing.
 
 Usage: ``PYTHONPATH=src python benchmarks/plan_world.py [--pairs 50] [--time-limit 20]
-[--worlds doorway,parking] [--methods ours,rrtstar,guide,rs,krrt] [--quick] [--markdown]``.
+[--worlds doorway,parking] [--methods ours,rrtstar,guide,tocp,rs,krrt] [--quick] [--markdown]``.
 """
 
 from __future__ import annotations
@@ -390,14 +393,15 @@ def main() -> None:
                     world=world, engine=ENGINE, time_limit=600)
         for method in args.methods.split(","):
             if (method == "rs" and system.name != "car") or (
-                    method == "guide" and spec["model"] not in ("car", "car-trailers:1")):
+                    method == "guide" and spec["model"] not in ("car", "car-trailers:1")) or (
+                    method == "tocp" and spec["model"] != "trident-snake"):
                 continue
             rows = []
             for k, (a, b) in enumerate(pairs):
                 seed = args.seed + k
-                if method in ("ours", "rrtstar", "guide"):
+                if method in ("ours", "rrtstar", "guide", "tocp"):
                     planner = {"ours": "rrtconnect", "rrtstar": "rrtstar",
-                               "guide": "reeds-shepp"}[method]
+                               "guide": "reeds-shepp", "tocp": "trident-ocp"}[method]
                     rows.append(run_ours(system, world, checker, a, b, args.time_limit, seed,
                                          planner))
                 elif method == "rs":

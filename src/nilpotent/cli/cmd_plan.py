@@ -214,7 +214,8 @@ def plan_command(
     Small problems are solved by iterated exact steering of nilpotent
     approximations; otherwise a collision-free path from OMPL (RRTConnect, RRT* with
     --planner rrtstar, or a Reeds-Shepp path for a car with --planner reeds-shepp) is
-    steered piece by piece, halving pieces whose motion leaves the free space.
+    steered piece by piece, halving pieces whose motion leaves the free space
+    (--planner trident-ocp: the trident snake's pieces by optimal control of its body path).
     Every plan is re-simulated densely and checked (clearance, limits, error).
     --json gives the controls as segments (schema nilpotent/plan@1):
     u_i(t) = constant + Σ_k cos[k-1]·cos(kωt) + sin[k-1]·sin(kωt).

@@ -72,9 +72,11 @@ PlannerOpt = Annotated[
     typer.Option("--planner", metavar="NAME",
                  help="Holonomic stage: rrtconnect (OMPL RRTConnect, shortest Euclidean path; "
                       "default), rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
-                      "anytime) or reeds-shepp (car-like models, and car-trailers:1 through "
+                      "anytime), reeds-shepp (car-like models, and car-trailers:1 through "
                       "its trailer: an OMPL Reeds-Shepp path lifted to the model's "
-                      "configurations)."),
+                      "configurations) or trident-ocp (trident-snake: RRTConnect's path, "
+                      "each piece driven by optimal control of the body path; needs the "
+                      "ocp extra)."),
 ]
 
 SeedOpt = Annotated[

@@ -480,8 +480,8 @@ def plan_global(
         Largest time between the samples of the re-timed motion (default: its
         duration / 500).
     planner:
-        ``"rrtconnect"``, ``"rrtstar"`` (:mod:`nilpotent.planning.optimal_planner`) or
-        ``"reeds-shepp"`` (car-like models: :mod:`nilpotent.planning.guide`).
+        ``"rrtconnect"``, ``"rrtstar"``, ``"reeds-shepp"`` (car-like models) or ``"trident-ocp"``
+        (``trident-snake``): :class:`~nilpotent.planning.optimal_planner.HolonomicStage`.
 
     Raises
     ------
@@ -644,7 +644,7 @@ def _plan_global(
             f"the limit of {MAX_PIECES:,}; raise --max-piece or plan to a nearer goal"
         )
     # a guide's waypoints bound exact legs (a chord's midpoint is on none: it is steered)
-    waypoints = list(path) if stage.car is not None else _densify(path, max_piece)
+    waypoints = list(path) if stage.car is not None else _densify(path, stage.piece)
     # 3. steer piece by piece, halving pieces whose motion is not admissible
     targets: deque[tuple[np.ndarray, int]] = deque((w, 0) for w in waypoints[1:])
     x, prev = x0.copy(), x0.copy()
@@ -659,7 +659,7 @@ def _plan_global(
         final = len(targets) == 1
         length = float(np.linalg.norm(w - prev))
         piece_tol = tol if final else max(tol, min(MID_TOL, MID_TOL_FRACTION * length))
-        p = (stage.exact(checker, x, prev, w, piece_tol, CHECK_POINTS)
+        p = (stage.exact(checker, x, prev, w, piece_tol, CHECK_POINTS, final)
              or steer_admissible(sys, checker, x, w, piece_tol, options))
         if p is None or (final and not p.converged):
             off = float(np.linalg.norm(x - prev))

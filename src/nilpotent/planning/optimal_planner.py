@@ -65,7 +65,7 @@ __all__ = [
 
 #: Global planners of :func:`~nilpotent.planning.global_planner.plan_global`: the holonomic
 #: stage's OMPL planner.
-PLANNERS = ("rrtconnect", "rrtstar", "reeds-shepp")
+PLANNERS = ("rrtconnect", "rrtstar", "reeds-shepp", "trident-ocp")
 #: Share of the time left that the Reeds–Shepp guide may take (the others: half).
 GUIDE_SHARE = 0.8
 #: The share of its time that RRT* spends improving its first path (:class:`HolonomicStage`).
@@ -302,7 +302,10 @@ class HolonomicStage:
     Raises
     ------
     OptionError
-        An unknown planner, or ``"reeds-shepp"`` for a model that is not car-like.
+        An unknown planner, ``"reeds-shepp"`` for a model that is not car-like,
+        ``"trident-ocp"`` for another model than ``trident-snake``.
+    MissingExtraError
+        ``"trident-ocp"`` without CasADi (the ``ocp`` extra).
     """
 
     def __init__(self, planner: str, piece: float, checker: Checker | None = None) -> None:
@@ -319,6 +322,12 @@ class HolonomicStage:
                 self.car = trailer_geometry(checker.system, checker)
             else:
                 self.car = car_geometry(checker.system, checker)
+        self.steering: Any = None  # trident-ocp: the plan's CasADi functions, once
+        if planner == "trident-ocp" and checker is not None:
+            from nilpotent.planning.trident_ocp import PIECE, BodyPathSteering
+
+            self.steering = BodyPathSteering(checker)
+            piece = max(piece, PIECE)
         self.planner, self.piece = planner, piece
         self.found: list[Any] = []
         #: Share of the time left that the stage may take: the guide's legs are driven
@@ -328,7 +337,7 @@ class HolonomicStage:
     def path(self, *args: Any, **kwargs: Any) -> list[np.ndarray]:
         """The path from OMPL (RRTConnect, RRT* under the ball–box cost, or the lifted
         Reeds–Shepp guide)."""
-        if self.planner == "rrtconnect":
+        if self.planner in ("rrtconnect", "trident-ocp"):
             return ompl_path(*args, **kwargs)
         if self.planner == "reeds-shepp":
             from nilpotent.planning.guide import guide_path
@@ -347,10 +356,19 @@ class HolonomicStage:
         return [np.array(p) for p in best.points]
 
     def exact(self, checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray,
-              tol: float, points: int) -> Any:
+              tol: float, points: int, final: bool = False) -> Any:
         """The piece from ``x`` to waypoint ``w`` (after ``prev``) driven exactly, or
         ``None`` (then steered): the lifted Reeds–Shepp guide's legs and turns at rest
-        (:func:`~nilpotent.planning.guide.exact_piece`); ``None`` for the other stages."""
+        (:func:`~nilpotent.planning.guide.exact_piece`), the trident's optimal control of
+        its body path (:func:`~nilpotent.planning.trident_ocp.body_path_piece`; ``final``:
+        the last piece, whose end is all of ``w``, not only its pose, as is that of a piece
+        back onto the path, ``w = prev``); ``None`` for the other stages."""
+        if self.steering is not None:
+            from nilpotent.planning.trident_ocp import body_path_piece
+
+            # back onto the path (``w`` the previous waypoint): all of ``w``, shape included
+            whole = final or not np.any(w != prev)
+            return body_path_piece(self.steering, x, w, tol, points, whole)
         if self.car is None:
             return None
         from nilpotent.planning.guide import exact_piece
@@ -379,6 +397,6 @@ def planner_json(planner: str, path_cost: float | None,
     """The plan JSON's ``planner``, ``path_cost``, ``cost_history`` (the reason of a ``null``
     ``path_cost`` added to ``reasons``)."""
     if path_cost is None:
-        reasons["path_cost"] = "the holonomic stage (rrtconnect, or none) has no cost"
+        reasons["path_cost"] = "the holonomic stage (rrtconnect, trident-ocp, or none) has no cost"
     return {"planner": planner, "path_cost": path_cost,
             "cost_history": [list(c) for c in cost_history]}
