@@ -390,7 +390,8 @@ def main() -> None:
                     world=world, engine=ENGINE, time_limit=600)
         for method in args.methods.split(","):
             if (method == "rs" and system.name != "car") or (
-                    method == "guide" and spec["model"] not in ("car", "car-trailers:1")):
+                    method == "guide" and spec["model"] not in ("car", "car-trailers:1",
+                                                           "car-trailers:2")):
                 continue
             rows = []
             for k, (a, b) in enumerate(pairs):

@@ -114,9 +114,9 @@ def test_motion_configs_of_an_arc_then_a_straight_leg():
     assert np.allclose(off[:, 0] * math.sin(-0.6) - off[:, 1] * math.cos(-0.6), 0.0)
 
 
-def test_two_trailers_refused():
+def test_three_trailers_refused():
     with pytest.raises(OptionError, match="car-like"):
-        plan_global(get_model("car-trailers:2"), (0, 0, 0, 0, 0), (3, 1, 0, 0, 0),
+        plan_global(get_model("car-trailers:3"), (0,) * 6, (3, 1, 0, 0, 0, 0),
                     planner="reeds-shepp", time_limit=600)
 
 
