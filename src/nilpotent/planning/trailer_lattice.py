@@ -17,22 +17,31 @@ the true system:
   trailer 2 follows as a caster: along ``s1``, ``dφ2/ds1 = κ − sin φ2 / d2``, a scalar
   ODE with constant coefficients solved in closed form (:func:`hitch_flow`: with
   ``t = tan(φ2/2)`` a Riccati equation ``dt/ds1 = (κ t² − 2 t/d2 + κ)/2``).  Backwards
-  the caster is unstable (``φ2`` leaves the equilibrium ``sin φ2 = κ d2``), so reverse
-  motions are short (:data:`REVERSE_STEP`).
+  the caster is unstable (``φ2`` leaves the equilibrium ``sin φ2 = κ d2``); each drive is
+  short and checked against the hitch limits.
 
-The search (:func:`lattice_path`): weighted A* from the start; a node's children turn the
-car at rest to each hitch angle of :data:`HITCH_ANGLES` and drive :data:`FORWARD_STEP`
-forwards or :data:`REVERSE_STEP` backwards; nodes binned on trailer 1's pose and ``φ2``
-(:data:`BIN_XY`, :data:`BIN_ANGLE`); cost the arc length of trailer 1 (reverse and
-switches penalised); heuristic the larger of the Reeds–Shepp distances (Reeds & Shepp 1990,
-OMPL's ``ReedsSheppStateSpace``) of trailer 1's and trailer 2's poses to theirs at the goal.
-Every motion is checked on samples (turns every :data:`TURN_STEP` rad, drives every
-:data:`DRIVE_STEP` of the car's path) with the extra clearance :data:`MARGIN` against the
-obstacles, the hitch limits and the self-collisions (the project's
-:class:`~nilpotent.planning.verify.Checker`).  A node within :data:`GOAL_REGION` of the goal
-is joined to it **exactly** (:func:`final_approach`): the parameters ``(φ1, s1)`` of the
-last drives are solved by least squares so that trailer 1's pose and ``φ2`` land on the
-goal's, and a last turn at rest sets ``θ0``.
+The search (:func:`lattice_path`) is a weighted A* grown **from the goal** (in a parking
+slot, where room is scarce; the motions are reversible, so the path found is run backwards:
+waypoints reversed, controls negated).  A node's children turn the car at rest to each hitch
+angle of :data:`HITCH_ANGLES` (and keep the present one: in a slot no turn may have room)
+and drive :data:`FORWARD_STEP` forwards or :data:`REVERSE_STEP` backwards; nodes binned on
+trailer 1's pose and ``φ2`` (:data:`BIN_XY`, :data:`BIN_ANGLE`); cost the arc length of
+trailer 1 (switches and turns penalised); heuristic the largest of the Reeds–Shepp distances
+(Reeds & Shepp 1990, OMPL's ``ReedsSheppStateSpace``, radius :data:`HEURISTIC_RADIUS`
+``· d2``) of trailer 1's and trailer 2's poses to theirs at the start and of their axle
+centres' grid distances among the obstacles
+(:func:`~nilpotent.planning.grid_distance.grid_distance`).  Every motion is checked on
+samples (turns every :data:`TURN_STEP` rad, drives every :data:`DRIVE_STEP` of the car's
+path, both denser near an obstacle) with the extra clearance :data:`MARGIN` (less near an
+obstacle, at least :data:`MIN_MARGIN`) against the obstacles, the hitch limits and the
+self-collisions (the project's :class:`~nilpotent.planning.verify.Checker`).  A node in free
+space (:data:`APPROACH_CLEARANCE`) with trailer 1 headed roughly as at the start, or within
+:data:`GOAL_REGION` of it, is joined to the start **exactly** (:func:`final_approach`): the
+parameters ``(φ1, s1)`` of a few drives (first guess: the legs of the Reeds–Shepp curve of
+trailer 1's pose) are solved by least squares so that trailer 1's pose and ``φ2`` land on
+the start's, and a turn at rest sets ``θ0``.  The search ends with a
+:class:`~nilpotent.errors.ComputationLimitError` when its seconds run out, a
+:class:`~nilpotent.errors.PlanningError` when every reachable bin was expanded.
 
 The path's waypoints are the states between the motions (drives cut every
 :data:`WAYPOINT_STEP`), each piece's constant controls kept in :class:`LatticePath`;
@@ -61,17 +70,15 @@ from nilpotent.planning.verify import Checker
 from nilpotent.progress import ProgressEvent
 from nilpotent.progress import report as report_progress
 
-__all__ = [
-    "LATTICE_COORDINATES", "LatticeGeometry", "LatticePath", "arc_states", "final_approach",
-    "hitch_flow", "is_lattice_model", "lattice_exact_piece", "lattice_geometry",
-    "lattice_path", "turn_states",
-]
+__all__ = ["LATTICE_COORDINATES", "LatticeGeometry", "LatticePath", "arc_states", "drive_controls",
+           "final_approach", "hitch_flow", "is_lattice_model", "lattice_exact_piece",
+           "lattice_geometry", "lattice_path", "turn_states"]
 
 #: Coordinates of a two-trailer model, in order.
 LATTICE_COORDINATES = ("x", "y", "theta0", "theta1", "theta2")
 #: Hitch angles ``φ1`` (rad) the car turns to at rest before a drive.
 HITCH_ANGLES = (-1.2, -0.8, -0.4, 0.0, 0.4, 0.8, 1.2)
-#: Trailer 1's arc length of a forward / a reverse drive.
+#: Trailer 1's arc length of a forward / a reverse drive of the search.
 FORWARD_STEP = 0.4
 REVERSE_STEP = 0.4
 #: Cost factors: reverse arc length, a change of direction, a radian of turn at rest.
@@ -89,17 +96,17 @@ BIN_XY = 0.15
 BIN_ANGLE = 0.15
 #: Sampling of the motion check: rad of a turn at rest, car's path length of a drive; and
 #: the extra clearance (obstacles, limits, bodies) that covers the motion between samples.
-TURN_STEP = 0.05
-DRIVE_STEP = 0.02
-MARGIN = 0.02
+TURN_STEP = 0.1
+DRIVE_STEP = 0.04
+MARGIN = 0.04
 #: The least margin, near an obstacle (the samples are then denser: :func:`_margin`).
 MIN_MARGIN = 0.002
-#: A node this close to the goal (trailer 1's axle centre, its heading, ``φ2``; each
-#: coordinate) is joined to it by :func:`final_approach`.
+#: A node this close to the start (trailer 1's axle centre, its heading, ``φ2``; each
+#: coordinate) is joined to it by :func:`final_approach` (the search grows from the goal).
 GOAL_REGION = 0.3
 #: ... and so is a node this far from every obstacle (free space, where the approach's
 #: long drives have room), once per bin of :data:`APPROACH_BIN` (trailer 1's pose, ``φ2``).
-APPROACH_CLEARANCE = 0.3
+APPROACH_CLEARANCE = 0.5
 APPROACH_BIN = 0.5
 #: ... with trailer 1's heading this close to the end's and ``|φ2|`` at most this (rad):
 #: the least squares of a farther node mostly ends in a local minimum.
@@ -107,17 +114,17 @@ APPROACH_HEADING = 0.8
 APPROACH_HITCH = 0.6
 #: Largest hitch angle of the final approach's drives; most drives it solves.
 APPROACH_PHI = 1.25
-APPROACH_DRIVES = 3
+APPROACH_DRIVES = 6
 #: Longest drive of the approach (trailer 1's arc length).
 APPROACH_LENGTH = 4.0
 #: The approach's drives keep ``|φ2| ≤ phi_max −`` this at :data:`APPROACH_PROBES` points
 #: each (a penalty of the least squares).
 APPROACH_SLACK = 0.2
-APPROACH_PROBES = 10
+APPROACH_PROBES = 6
 #: ... and the axle centres and the car's front (:func:`_axles`) this far from the obstacles.
 APPROACH_ROOM = 0.3
 #: Most evaluations of each least-squares run (one per initial guess).
-APPROACH_EVALS = 40
+APPROACH_EVALS = 100
 #: Most evaluations of each least-squares run (three initial guesses).
 #: Cell of the obstacle-aware grid heuristic, and the clearance its free cells keep (about
 #: half a trailer's width).
@@ -361,9 +368,8 @@ def final_approach(checker: Checker, q: np.ndarray, xg: np.ndarray, geometry: La
     ``(x1, y1, θ1, φ2)`` lands on the goal's, ``|φ2|`` and the axle centres' clearance
     penalised on the way (:data:`APPROACH_SLACK`, :data:`APPROACH_ROOM`), then the turn at
     rest to the goal's ``θ0``; admissible on the samples (module doc) and within ``1e-9``.
-    First guesses: the legs of the Reeds–Shepp curve (OMPL ``space``, its radius ``r``:
-    ``φ1 = atan(d1 κ)``) of trailer 1's pose, then :data:`APPROACH_DRIVES` drives along the
-    goal's heading."""
+    First guesses: :data:`APPROACH_DRIVES` equal straight drives along the goal's heading,
+    then the legs of trailer 1's Reeds–Shepp curve (OMPL ``space``; ``φ1 = atan(d1 κ)``)."""
     from scipy.optimize import least_squares
 
     target = _reduced(xg, geometry)
@@ -374,33 +380,34 @@ def final_approach(checker: Checker, q: np.ndarray, xg: np.ndarray, geometry: La
     def residual(p: np.ndarray) -> np.ndarray:
         # the goal's (x1, y1, θ1, φ2), and how far φ2 leaves |φ2| <= soft on the way
         x = np.asarray(q, dtype=float)
-        over = []
+        runs = []
         for i in range(len(p) // 2):
             x = x.copy()
             x[2] = x[3] + p[2 * i]
-            run = arc_states(x, p[2 * i + 1] * probe, geometry)
-            over.append(np.maximum(np.abs(run[:, 3] - run[:, 4]) - soft, 0.0))
-            if world is not None:
-                over.append(np.maximum(APPROACH_ROOM - world.point_clearance(
-                    _axles(run, geometry)), 0.0).ravel())
-            x = run[-1]
+            runs.append(arc_states(x, p[2 * i + 1] * probe, geometry))
+            x = runs[-1][-1]
+        run = np.vstack(runs)
+        over = [np.maximum(np.abs(run[:, 3] - run[:, 4]) - soft, 0.0)]
+        if world is not None:
+            ok = np.all(np.isfinite(run), axis=1)
+            room = np.full((len(run), 4), APPROACH_ROOM)
+            room[ok] = world.point_clearance(_axles(run[ok], geometry))
+            over.append(np.maximum(APPROACH_ROOM - room, 0.0).ravel())
         r = np.concatenate([_reduced(x, geometry) - target, *over])
         return np.nan_to_num(r, nan=10.0)
 
-    starts = []
-    if space is not None:
-        starts += _reeds_shepp_guess(space, _reduced(q, geometry), target, geometry)
     diff = target - _reduced(q, geometry)
     along = float(diff[0] * math.cos(target[2]) + diff[1] * math.sin(target[2]))
     k = APPROACH_DRIVES
-    starts += [np.array([0.0, along / k] * k), np.array([0.4, along / 3, -0.4, along / 3,
-                                                        0.0, along / 3])]
+    starts = [np.array([0.0, along / k] * k)]
+    if space is not None:
+        starts += _reeds_shepp_guess(space, _reduced(q, geometry), target, geometry)
     for p0 in starts:
         lo = np.tile([-APPROACH_PHI, -APPROACH_LENGTH], len(p0) // 2)
         fit = least_squares(residual, np.clip(p0, lo + 1e-9, -lo - 1e-9), bounds=(lo, -lo),
                             xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=APPROACH_EVALS)
-        if not float(np.abs(fit.fun).max()) < 1e-10:
-            continue
+        if not (float(np.abs(fit.fun[:4]).max()) < 1e-10 and float(fit.fun.max()) < 1e-6):
+            continue  # the goal missed, or the penalties not met (the check decides)
         p = fit.x
         out, x = [], np.asarray(q, dtype=float)
         for i in range(len(p) // 2):
@@ -416,10 +423,8 @@ def final_approach(checker: Checker, q: np.ndarray, xg: np.ndarray, geometry: La
 
 def _reeds_shepp_guess(space: Any, a: np.ndarray, b: np.ndarray,
                        geometry: LatticeGeometry) -> list[np.ndarray]:
-    """Drives ``(φ1, s1)`` (flattened) along the legs of OMPL's Reeds–Shepp curve from trailer
-    1's pose ``a[:3]`` to ``b[:3]`` (:func:`~nilpotent.planning.guide.edge_legs`), the
-    longest leg halved until there are two drives at least; none if its legs are not
-    solved."""
+    """Drives ``(φ1, s1)`` (flattened) on the legs of the Reeds–Shepp curve from trailer 1's
+    pose ``a[:3]`` to ``b[:3]`` (:func:`~nilpotent.planning.guide.edge_legs`; at least two)."""
     from nilpotent.planning.guide import edge_legs, edge_poses
 
     sa, sb = space.allocState(), space.allocState()
@@ -511,7 +516,8 @@ def _heuristic(checker: Checker, space: Any, geometry: LatticeGeometry,
 
 def lattice_path(checker: Checker, x0: np.ndarray, xg: np.ndarray, seconds: float,
                  seed: int | None = None, *args: Any, **kwargs: Any) -> LatticePath:
-    """The lattice search from ``x0`` to ``xg`` (module doc) within ``seconds``.
+    """The lattice search for a path from ``x0`` to ``xg`` (module doc: grown from ``xg``,
+    joined exactly to ``x0``) within ``seconds``.
 
     Extra arguments (those of :func:`~nilpotent.planning.holonomic_path.ompl_path`) are
     ignored: the search is deterministic and uses the checker's own validity.
@@ -578,9 +584,13 @@ def lattice_path(checker: Checker, x0: np.ndarray, xg: np.ndarray, seconds: floa
                 and gap[2] <= APPROACH_HEADING and abs(r[3]) <= APPROACH_HITCH):
             approached.add(coarse)
             tried += 1
-            found = final_approach(checker, q, end, geometry, space)
-            if found is not None:
-                return _result(i, found, states, parent, via, geometry, expanded, t0, x0)
+            # from the start to the node (forward drives, better conditioned), else back
+            for forward in (True, False):
+                a, b = (end, q) if forward else (q, end)
+                found = final_approach(checker, a, b, geometry, space)
+                if found is not None:
+                    return _result(i, found, forward, states, parent, via, geometry,
+                                   expanded, t0, x0)
         for m, child, step in _children(checker, q, sign[i], geometry, margin):
             states.append(child)
             cost.append(cost[i] + step)
@@ -593,28 +603,47 @@ def lattice_path(checker: Checker, x0: np.ndarray, xg: np.ndarray, seconds: floa
                         f"({tried} tried)")
 
 
-def _result(i: int, approach: list[_Motion], states: list[np.ndarray], parent: list[int],
-            via: list[_Motion | None], geometry: LatticeGeometry, expanded: int,
-            t0: float, x0: np.ndarray) -> LatticePath:
-    """The path from ``x0`` that runs backwards the motions from the root (the goal) to node
-    ``i`` followed by ``approach`` (which ends at ``x0``): waypoints reversed, controls
-    negated."""
+def _result(i: int, approach: list[_Motion], forward: bool, states: list[np.ndarray],
+            parent: list[int], via: list[_Motion | None], geometry: LatticeGeometry,
+            expanded: int, t0: float, x0: np.ndarray) -> LatticePath:
+    """The path from ``x0``: the motions from the root (the goal) to node ``i`` run
+    backwards (waypoints reversed, controls negated), after ``approach`` from ``x0`` to the
+    node (``forward``) or before it, run backwards too (``approach`` from the node to
+    ``x0``)."""
     search: list[_Motion] = []
     while parent[i] >= 0:
         m = via[i]
         assert m is not None
         search.append(m)
         i = parent[i]
-    motions = search[::-1] + list(approach)
-    q = states[i]
+    if forward:
+        head, head_controls, head_length = _waypoints(x0, approach, geometry)
+        back, controls, length = _waypoints(states[i], search[::-1], geometry)
+    else:
+        head, head_controls, head_length = [tuple(map(float, x0))], [], 0.0
+        back, controls, length = _waypoints(states[i], search[::-1] + approach, geometry)
+    back.reverse()
+    head[0] = tuple(map(float, x0))
+    points = head[:-1] + back  # the approach ends at the node within 1e-9
+    controls = head_controls + [(-u[0], -u[1]) for u in reversed(controls)]
+    length += head_length
+    seconds = time.perf_counter() - t0
+    return LatticePath(tuple(points), tuple(controls), length, expanded, seconds,
+                       ((seconds, length),))
+
+
+def _waypoints(q: np.ndarray, motions: Sequence[_Motion], geometry: LatticeGeometry) -> tuple[
+        list[tuple[float, ...]], list[tuple[float, float]], float]:
+    """Waypoints of ``motions`` from ``q`` (module doc), the controls between them, and
+    trailer 1's arc length."""
     points = [tuple(map(float, q))]
-    controls: list[tuple[float, float] | None] = []
+    controls: list[tuple[float, float]] = []
     length = 0.0
     for m in motions:
         if abs(m.theta0 - float(q[2])) > 0:
             k = max(1, math.ceil(abs(m.theta0 - float(q[2])) / TURN_WAYPOINT_STEP))
             for th in np.linspace(float(q[2]), m.theta0, k + 1)[1:]:
-                nxt = q.copy()
+                nxt = np.array(q, dtype=float)
                 nxt[2] = th
                 controls.append((0.0, float(th - q[2])))
                 points.append(tuple(map(float, nxt)))
@@ -627,12 +656,7 @@ def _result(i: int, approach: list[_Motion], states: list[np.ndarray], parent: l
                 points.append(tuple(map(float, e)))
             q = ends[-1]
             length += abs(m.s1)
-    points.reverse()
-    points[0] = tuple(map(float, x0))
-    controls = [(-u[0], -u[1]) for u in reversed(controls) if u is not None]
-    seconds = time.perf_counter() - t0
-    return LatticePath(tuple(points), tuple(controls), length, expanded, seconds,
-                       ((seconds, length),))
+    return points, controls, length
 
 
 def lattice_exact_piece(checker: Checker, x: np.ndarray, prev: np.ndarray, w: np.ndarray,
