@@ -123,6 +123,7 @@ APPROACH_SLACK = 0.2
 APPROACH_PROBES = 6
 #: ... and the axle centres and the car's front (:func:`_axles`) this far from the obstacles.
 APPROACH_ROOM = 0.3
+APPROACH_MARGIN = 0.01  #: the approach's margin (checked once: denser samples are cheap)
 #: Most evaluations of each least-squares run (one per initial guess).
 APPROACH_EVALS = 100
 #: Most evaluations of each least-squares run (three initial guesses).
@@ -329,8 +330,7 @@ def _apply(q: np.ndarray, motions: Sequence[_Motion], geometry: LatticeGeometry,
 
 def _admissible(checker: Checker, samples: Sequence[np.ndarray], margin: float) -> bool:
     rows = np.vstack(samples)
-    return bool(np.all(np.isfinite(rows))
-                and np.all(checker.valid(rows, margin, margin, margin)))
+    return bool(np.all(np.isfinite(rows)) and np.all(checker.valid(rows, *[margin] * 3)))
 
 
 def _pose(q: np.ndarray, which: int, geometry: LatticeGeometry) -> tuple[float, float, float]:
@@ -414,7 +414,8 @@ def final_approach(checker: Checker, q: np.ndarray, xg: np.ndarray, geometry: La
             out.append(_Motion(float(x[3] + p[2 * i]), float(p[2 * i + 1])))
             x, _ = _apply(x, out[-1:], geometry)
         out.append(_Motion(float(xg[2]), 0.0))
-        margin = _margin(checker, np.asarray(q, dtype=float), np.asarray(xg, dtype=float))
+        margin = min(APPROACH_MARGIN, _margin(checker, np.asarray(q, dtype=float),
+                                              np.asarray(xg, dtype=float)))
         end, samples = _apply(np.asarray(q, dtype=float), out, geometry, margin)
         if _admissible(checker, samples, margin) and float(np.abs(end - xg).max()) < 1e-9:
             return out
