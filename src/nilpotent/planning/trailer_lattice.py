@@ -37,9 +37,9 @@ obstacle, at least :data:`MIN_MARGIN`) against the obstacles, the hitch limits a
 self-collisions (the project's :class:`~nilpotent.planning.verify.Checker`).  A node in free
 space (:data:`APPROACH_CLEARANCE`) with trailer 1 headed roughly as at the start, or within
 :data:`GOAL_REGION` of it, is joined to the start **exactly** (:func:`final_approach`): the
-parameters ``(φ1, s1)`` of a few drives (first guess: the legs of the Reeds–Shepp curve of
-trailer 1's pose) are solved by least squares so that trailer 1's pose and ``φ2`` land on
-the start's, and a turn at rest sets ``θ0``.  The search ends with a
+parameters ``(φ1, s1)`` of :data:`APPROACH_DRIVES` drives from the start (forwards: better
+conditioned) are solved by least squares so that trailer 1's pose and ``φ2`` land on the
+node's, and a turn at rest sets ``θ0``; else from the node to the start.  The search ends with a
 :class:`~nilpotent.errors.ComputationLimitError` when its seconds run out, a
 :class:`~nilpotent.errors.PlanningError` when every reachable bin was expanded.
 
