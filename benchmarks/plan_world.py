@@ -20,11 +20,12 @@ Methods, same time budget per query, same pairs:
   (verified: re-simulated, admissible, within ``TOL``);
 * ``rrtstar``: the same with ``planner="rrtstar"`` (OMPL RRT* under the ball–box cost,
   :mod:`nilpotent.planning.optimal_planner`);
-* ``guide`` (``car`` and ``car-trailers:1`` only): the same with ``planner="reeds-shepp"``
-  (an OMPL Reeds–Shepp path lifted to the car's configurations, its legs driven exactly
-  piece by piece, :mod:`nilpotent.planning.guide`; for one trailer, the path of the
-  trailer as a car, :mod:`nilpotent.planning.trailer_guide`); every method prints the
-  reason of a failure on stderr;
+* ``guide`` (``car``, ``car-trailers:1`` and ``:2`` only): the same with
+  ``planner="reeds-shepp"`` (an OMPL Reeds–Shepp path lifted to the car's configurations,
+  its legs driven exactly piece by piece, :mod:`nilpotent.planning.guide`; for one trailer,
+  the path of the trailer as a car, :mod:`nilpotent.planning.trailer_guide`; for two, the
+  lattice search over exact motions, :mod:`nilpotent.planning.trailer_lattice`); every
+  method prints the reason of a failure on stderr;
 * ``rs`` (``car`` only): OMPL RRT* in ``ReedsSheppStateSpace(rmin)`` (``rmin`` the model's
   parameter), the same validity check (the car's outline with ``φ = 0``) at the
   resolution of OMPL's default; it runs the whole budget (anytime) and the time reported

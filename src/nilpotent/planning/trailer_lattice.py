@@ -112,7 +112,7 @@ APPROACH_BIN = 0.5
 #: the least squares of a farther node mostly ends in a local minimum.
 APPROACH_HEADING = 0.8
 APPROACH_HITCH = 0.6
-#: Largest hitch angle of the final approach's drives; most drives it solves.
+#: Largest hitch angle of the final approach's drives; the number of drives it solves.
 APPROACH_PHI = 1.25
 APPROACH_DRIVES = 6
 #: Longest drive of the approach (trailer 1's arc length).
@@ -126,7 +126,6 @@ APPROACH_ROOM = 0.3
 APPROACH_MARGIN = 0.01  #: the approach's margin (checked once: denser samples are cheap)
 #: Most evaluations of each least-squares run (one per initial guess).
 APPROACH_EVALS = 100
-#: Most evaluations of each least-squares run (three initial guesses).
 #: Cell of the obstacle-aware grid heuristic, and the clearance its free cells keep (about
 #: half a trailer's width).
 GRID = 0.1
