@@ -20,11 +20,12 @@ Methods, same time budget per query, same pairs:
   (verified: re-simulated, admissible, within ``TOL``);
 * ``rrtstar``: the same with ``planner="rrtstar"`` (OMPL RRT* under the ball–box cost,
   :mod:`nilpotent.planning.optimal_planner`);
-* ``guide`` (``car`` and ``car-trailers:1`` only): the same with ``planner="reeds-shepp"``
-  (an OMPL Reeds–Shepp path lifted to the car's configurations, its legs driven exactly
-  piece by piece, :mod:`nilpotent.planning.guide`; for one trailer, the path of the
-  trailer as a car, :mod:`nilpotent.planning.trailer_guide`); every method prints the
-  reason of a failure on stderr;
+* ``guide`` (``car``, ``car-trailers:1`` and ``:2`` only): the same with
+  ``planner="reeds-shepp"`` (an OMPL Reeds–Shepp path lifted to the car's configurations,
+  its legs driven exactly piece by piece, :mod:`nilpotent.planning.guide`; for one trailer,
+  the path of the trailer as a car, :mod:`nilpotent.planning.trailer_guide`; for two, the
+  lattice search over exact motions, :mod:`nilpotent.planning.trailer_lattice`); every
+  method prints the reason of a failure on stderr;
 * ``tocp`` (``trident-snake`` only): the same with ``planner="trident-ocp"`` (RRTConnect's
   path, each piece driven by direct optimal control of the body path,
   :mod:`nilpotent.planning.trident_ocp`);
@@ -393,7 +394,8 @@ def main() -> None:
                     world=world, engine=ENGINE, time_limit=600)
         for method in args.methods.split(","):
             if (method == "rs" and system.name != "car") or (
-                    method == "guide" and spec["model"] not in ("car", "car-trailers:1")) or (
+                    method == "guide" and spec["model"] not in ("car", "car-trailers:1",
+                                                           "car-trailers:2")) or (
                     method == "tocp" and spec["model"] != "trident-snake"):
                 continue
             rows = []

@@ -103,7 +103,7 @@ def test_not_car_like_refused():
         plan_global(get_model("unicycle"), (0, 0, 0), (3, 1, 0), planner="reeds-shepp",
                     time_limit=600)
     with pytest.raises(OptionError, match="car-like"):
-        plan_global(get_model("car-trailers:2"), (0, 0, 0, 0, 0), (3, 1, 0, 0, 0),
+        plan_global(get_model("car-trailers:3"), (0,) * 6, (3, 1, 0, 0, 0, 0),
                     planner="reeds-shepp", time_limit=600)
     result = CliRunner().invoke(app, ["plan", "unicycle", "--to", "x=3", "--planner",
                                       "reeds-shepp", "--json"])

@@ -123,9 +123,9 @@ def test_motion_pieces_of_an_arc_then_a_straight_leg():
     assert np.hypot(*(straight[-1, :2] - end[:2])) == pytest.approx(0.4)
 
 
-def test_two_trailers_refused():
+def test_three_trailers_refused():
     with pytest.raises(OptionError, match="car-like"):
-        plan_global(get_model("car-trailers:2"), (0, 0, 0, 0, 0), (3, 1, 0, 0, 0),
+        plan_global(get_model("car-trailers:3"), (0,) * 6, (3, 1, 0, 0, 0, 0),
                     planner="reeds-shepp", time_limit=600)
 
 

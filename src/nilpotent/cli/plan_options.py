@@ -74,7 +74,8 @@ PlannerOpt = Annotated[
                       "default), rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
                       "anytime), reeds-shepp (car-like models, and car-trailers:1 through "
                       "its trailer: an OMPL Reeds-Shepp path lifted to the model's "
-                      "configurations) or trident-ocp (trident-snake: RRTConnect's path, "
+                      "configurations; car-trailers:2: a lattice search over exact "
+                      "motions) or trident-ocp (trident-snake: RRTConnect's path, "
                       "each piece driven by optimal control of the body path; needs the "
                       "ocp extra)."),
 ]

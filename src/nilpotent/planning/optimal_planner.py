@@ -315,10 +315,14 @@ class HolonomicStage:
         if planner == "reeds-shepp" and checker is not None:
             from nilpotent.planning.guide import car_geometry
             from nilpotent.planning.trailer_guide import TRAILER_COORDINATES, trailer_geometry
+            from nilpotent.planning.trailer_lattice import is_lattice_model, lattice_geometry
 
             # the trailer as a car (trailer_guide); a model with a trailer's coordinates
-            # that is not one is refused with the trailer's reason, not the car's
-            if checker.system.coordinate_names == TRAILER_COORDINATES:
+            # that is not one is refused with the trailer's reason, not the car's; two
+            # trailers: the lattice search over exact motions (trailer_lattice)
+            if is_lattice_model(checker.system):
+                self.car = lattice_geometry(checker.system, checker)
+            elif checker.system.coordinate_names == TRAILER_COORDINATES:
                 self.car = trailer_geometry(checker.system, checker)
             else:
                 self.car = car_geometry(checker.system, checker)
@@ -342,7 +346,12 @@ class HolonomicStage:
         if self.planner == "reeds-shepp":
             from nilpotent.planning.guide import guide_path
             from nilpotent.planning.trailer_guide import TrailerGeometry, trailer_guide_path
+            from nilpotent.planning.trailer_lattice import LatticeGeometry, lattice_path
 
+            if isinstance(self.car, LatticeGeometry):
+                found = lattice_path(*args, **kwargs)
+                self.found.append(found)
+                return [np.array(p) for p in found.points]
             find = trailer_guide_path if isinstance(self.car, TrailerGeometry) else guide_path
             # the plain validity, not plan_global's extra clearance (room for steered
             # pieces): the guide's legs are driven exactly, and the clearance kept the
@@ -359,10 +368,12 @@ class HolonomicStage:
               tol: float, points: int, final: bool = False) -> Any:
         """The piece from ``x`` to waypoint ``w`` (after ``prev``) driven exactly, or
         ``None`` (then steered): the lifted Reeds–Shepp guide's legs and turns at rest
-        (:func:`~nilpotent.planning.guide.exact_piece`), the trident's optimal control of
-        its body path (:func:`~nilpotent.planning.trident_ocp.body_path_piece`; ``final``:
-        the last piece, whose end is all of ``w``, not only its pose, as is that of a piece
-        back onto the path, ``w = prev``); ``None`` for the other stages."""
+        (:func:`~nilpotent.planning.guide.exact_piece`), the lattice's motions for two
+        trailers (:func:`~nilpotent.planning.trailer_lattice.lattice_exact_piece`), the
+        trident's optimal control of its body path
+        (:func:`~nilpotent.planning.trident_ocp.body_path_piece`; ``final``: the last piece,
+        whose end is all of ``w``, not only its pose, as is that of a piece back onto the
+        path, ``w = prev``); ``None`` for the other stages."""
         if self.steering is not None:
             from nilpotent.planning.trident_ocp import body_path_piece
 
@@ -373,7 +384,10 @@ class HolonomicStage:
             return None
         from nilpotent.planning.guide import exact_piece
         from nilpotent.planning.trailer_guide import TrailerGeometry, trailer_exact_piece
+        from nilpotent.planning.trailer_lattice import LatticeGeometry, lattice_exact_piece
 
+        if isinstance(self.car, LatticeGeometry):
+            return lattice_exact_piece(checker, x, prev, w, tol, points, self.found[-1])
         if isinstance(self.car, TrailerGeometry):
             return trailer_exact_piece(checker, x, prev, w, tol, points, self.car)
         return exact_piece(checker, x, prev, w, tol, points, self.car.wheelbase)
