@@ -215,7 +215,7 @@ def test_guide_path_in_the_open_is_driven_exactly_to_the_goal():
     assert np.allclose(x, xg, atol=1e-8)
 
 
-def test_guide_grown_from_a_goal_in_the_slot_is_driven_from_the_start():
+def test_guide_grown_from_a_goal_in_the_slot_is_driven_from_the_start(monkeypatch):
     """A goal in the parking slot (less clearance than the start): the search grows from the
     goal and the path is reversed (each leg's curvature kept, its signed length negated).
     The waypoints, driven piece by piece by the exact flows from the start, end at the goal,
@@ -231,7 +231,11 @@ def test_guide_grown_from_a_goal_in_the_slot_is_driven_from_the_start():
     checker = Checker(system, load_world("parking"))
     x0, xg = np.array([-2.0, 1.0, 0.0, 0.0]), np.array([1.0, -0.55, 0.0, 0.0])
     assert checker.measures(xg[None])[0][0] < checker.measures(x0[None])[0][0]
-    guide = guide_path(checker, x0, xg, seconds=8.0, seed=3)
+    import nilpotent.planning.guide as guide_module
+
+    # a generous time for the first path (a loaded CI machine), a short improvement
+    monkeypatch.setattr(guide_module, "IMPROVE_SECONDS", 1.0)
+    guide = guide_path(checker, x0, xg, seconds=60.0, seed=3)
     pts = [np.array(p) for p in guide.points]
     assert np.array_equal(pts[0], x0) and np.array_equal(pts[-1], xg)
     assert np.all(checker.valid(np.array(pts)))
