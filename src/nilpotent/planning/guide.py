@@ -312,7 +312,11 @@ def guide_path(
                                 improve_by=IMPROVE_FRACTION * seconds)
         solution: Any = pdef.getSolutionPath()  # a geometric path (the stubs say Path)
         path: Any = og.PathGeometric(solution)
-        og.PathSimplifier(si).simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))
+        simplifier = og.PathSimplifier(si)
+        simplifier.simplify(path, float(min(SIMPLIFY_SECONDS, seconds)))
+        if not path.check():  # OMPL's smoothing does not check every curve it makes
+            path = og.PathGeometric(solution)
+            simplifier.reduceVertices(path)  # each shortcut checked
         length = float(path.length())
         vertices = [path.getState(i) for i in range(path.getStateCount())]
         try:
