@@ -134,8 +134,9 @@ def trailer_geometry(system: ControlSystem, checker: Checker) -> TrailerGeometry
     why = _not_trailer_like(system)
     if why:
         raise OptionError(
-            "--planner reeds-shepp needs a car-like model or a car with one trailer "
-            f"(coordinates x, y, theta0, theta1, e.g. car-trailers:1): model {system.name} {why}")
+            "--planner reeds-shepp needs a car-like model, a car with one trailer "
+            "(coordinates x, y, theta0, theta1, e.g. car-trailers:1) or the built-in "
+            f"car-trailers:2: model {system.name} {why}")
     th0, th1 = system.coordinates[2:]
     hitch = float(sp.simplify(sp.sin(th0 - th1) / system.specialized_fields[0][3]))
     assert checker.limits is not None
