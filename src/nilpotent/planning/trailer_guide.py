@@ -435,7 +435,8 @@ def _search(checker: Checker, kept: Checker, geometry: TrailerGeometry, s0: np.n
                                         if rejected else str(e)) from None
                 break
             best = min((f[1] for f in found), default=math.inf)
-            lifted = _simplified(si, og.PathGeometric(pdef.getSolutionPath()), seconds, lift,
+            solution: Any = pdef.getSolutionPath()  # a geometric path (the stubs say Path)
+            lifted = _simplified(si, og.PathGeometric(solution), seconds, lift,
                                  lambda v, best=best: _length(poses, v) < best)
             planner.clear()
             pdef.clearSolutionPaths()
