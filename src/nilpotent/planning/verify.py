@@ -323,7 +323,7 @@ class Verification:
         Every sample admissible for the checker.
     reached, error:
         Last state and its distance to the goal (from :func:`verify_segments`: plus the
-        integration error estimated by a second, tighter re-simulation).
+        integration error estimated by a second, looser re-simulation).
     self_clearance:
         Minimum distance between two bodies that must not touch (``≤ 0``: a
         self-collision); ``None`` where the model names no such pair.
@@ -403,17 +403,19 @@ def verify_segments(
 
     The ``error`` returned is a bound, not one integrator's number: the distance of the
     re-simulated end to ``goal`` plus the distance between that end and the end of a second
-    re-simulation at ten times tighter ``rtol`` and ``atol`` (an estimate of the integration
-    error).  Ill-conditioned controls (a change of ``1e-9`` at the start moving the end
-    ``10⁴`` times as much, as optimal-control pieces fitted on one integrator can be) were
-    reported within a ``tol`` of ``1e-8`` that an independent scipy replay missed by
-    ``6e-8``; with the bound such a plan is refused instead."""
+    re-simulation at ten times looser ``rtol`` and ``atol`` (an estimate of the integration
+    error of that looser run, which is larger than this run's: a conservative bound; a
+    tighter run can fall below the integrator's least step where this one does not).
+    Ill-conditioned controls (a change of ``1e-9`` at the start moving the end ``10⁴``
+    times as much, as optimal-control pieces fitted on one integrator can be) were reported
+    within a ``tol`` of ``1e-8`` that an independent scipy replay missed by ``6e-8``; with
+    the bound (``9.5e-8`` for that plan) such a plan is refused instead."""
     times, states = simulate_path(checker.system, start, list(segments), points_per_segment,
                                   settings, hard=True)  # a plan found in time: verified in time
     v = verify_states(checker, times, states, goal)
     if not segments:
         return v
-    tight = settings.replace(rtol=settings.rtol / 10, atol=settings.atol / 10)
-    _, ends = simulate_path(checker.system, start, list(segments), 2, tight, hard=True)
+    loose = settings.replace(rtol=settings.rtol * 10, atol=settings.atol * 10)
+    _, ends = simulate_path(checker.system, start, list(segments), 2, loose, hard=True)
     spread = float(np.linalg.norm(ends[-1] - states[-1]))
     return dataclasses.replace(v, error=v.error + spread)
