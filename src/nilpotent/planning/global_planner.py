@@ -584,9 +584,9 @@ def _plan_global(
                 f"{v.self_clearance}, singular margin {v.min_singular_margin}); no plan returned"
             )
         if not v.error <= tol:
-            raise PlanningError(
-                f"the re-simulated plan misses the goal by {v.error:.3g} > tol {tol:g}"
-            )
+            raise PlanningError(f"the re-simulated plan misses the goal by {v.error:.3g} > tol "
+                                f"{tol:g} (a bound: the end's error plus its spread to a "
+                                "looser re-simulation; a tol near 1e-12 cannot be certified)")
         whole = Plan(
             system=sys, start=tuple(x0), goal=tuple(xg), segments=tuple(segments),
             reached=v.reached, error=v.error, iterations=tuple(iterations),
