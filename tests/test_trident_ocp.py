@@ -3,7 +3,7 @@
 Every piece is replayed independently (scipy's DOP853 on the lambdified fields,
 tests/replay.py); its end, joint limits and legs' clearance are checked on the replay, and
 its body path is compared with the distance of its ends (the nilpotent steering of such
-pieces drove 20 times it, benchmarks/RESULTS.md).  The half-planes that keep the world's
+pieces drove 20 times it, benchmarks/RESULTS.md).  The separating lines that keep the world's
 obstacles off the robot are checked against the obstacles with shapely.
 """
 
@@ -24,7 +24,13 @@ from nilpotent.errors import OptionError
 from nilpotent.models import get_model
 from nilpotent.planning.global_planner import plan_global
 from nilpotent.planning.robot import Robot
-from nilpotent.planning.trident_ocp import END_ROOM, BodyPathSteering, body_path_piece
+from nilpotent.planning.trident_ocp import (
+    END_ROOM,
+    VERTICES,
+    WORLD_MARGIN,
+    BodyPathSteering,
+    body_path_piece,
+)
 from nilpotent.planning.verify import Checker
 from nilpotent.planning.world import load_world, world_from_dict
 from replay import resimulate
@@ -80,28 +86,63 @@ def test_an_intermediate_piece_reaches_the_pose_and_leaves_room_in_the_joints(st
     assert _body_path(p.segments) < 1.2 * math.hypot(2.0, 0.5)
 
 
-def test_the_world_half_planes_keep_every_obstacle_beyond_and_the_ends_inside():
+def test_the_first_separating_lines_have_every_imposed_obstacle_beyond():
+    """Each interval's obstacles (the nearest to the reference motion) start beyond a
+    unit-normal line that the reference robot is on the other side of, where it is clear."""
     world = world_from_dict({
         "name": "box", "bounds": {"x": [-6.0, 10.0], "y": [-3.0, 3.0]},
         "obstacles": [{"polygon": [[1.7, 2.3], [2.3, 2.3], [2.3, 5.0], [1.7, 5.0]]},
                       {"disc": {"center": [4.0, -2.5], "radius": 0.5}}]})
     steering = BodyPathSteering(Checker(get_model("trident-snake"), world))
     x, w = np.array([0.0, 0.0, 0.3, 0, 0, 0]), np.array([3.0, 0.2, 0.0, 0, 0, 0])
-    planes = steering.planes(x, w)
-    used = planes[planes[:, 2] != -1.0]
-    assert len(used) >= 4  # the wall, the disc, the bounds y = ±3
-    wall = shapely.Polygon([[1.7, 2.3], [2.3, 2.3], [2.3, 5.0], [1.7, 5.0]])
-    disc = shapely.Point(4.0, -2.5).buffer(0.5, 256)
+    _, states = steering._guess(x, w, 36)
+    obs, a0, b0, box, margins, slots = steering.separations(x, w, states, True)
+    assert slots == 2  # the wall and the disc are both within reach of the crossing
+    assert box.tolist() == pytest.approx([-6 + WORLD_MARGIN, 10 - WORLD_MARGIN,
+                                          -3 + WORLD_MARGIN, 3 - WORLD_MARGIN])
+    assert np.all(margins <= WORLD_MARGIN)
     robot = Robot(steering.checker.system)
-    for a_x, a_y, b in used:
-        for q in (x, w):  # the robot at both ends on the allowed side (vertices and wheels)
-            pts = robot.points(q[None, :])
-            corners = np.vstack([pts["polygons"][0][0], pts["discs"][0]])
-            assert np.all(a_x * corners[:, 0] + a_y * corners[:, 1] >= b - 1e-9)
-    for obstacle in (wall, disc):  # some plane has the whole obstacle strictly beyond
-        pts = np.array(obstacle.exterior.coords)
-        beyond = [np.all(a_x * pts[:, 0] + a_y * pts[:, 1] < b) for a_x, a_y, b in used]
-        assert any(beyond)
+    shapes = [shapely.Polygon([[1.7, 2.3], [2.3, 2.3], [2.3, 5.0], [1.7, 5.0]]),
+              shapely.Point(4.0, -2.5).buffer(0.5, 256)]
+    for col in range(obs.shape[1]):
+        k = col % 36
+        vx, vy, rho = obs[:VERTICES, col], obs[VERTICES:2 * VERTICES, col], obs[-1, col]
+        a, b = a0[:, col], b0[0, col]
+        assert np.linalg.norm(a) == pytest.approx(1.0)
+        assert np.all(a[0] * vx + a[1] * vy + rho <= b + 1e-9)  # the stand-in beyond
+        if vx[0] > 500:  # an unused slot: a point FAR away
+            continue
+        ends = states[:, k:k + 2].T
+        pts = robot.points(ends)
+        corners = np.vstack([np.vstack([pts["polygons"][0][i], pts["discs"][i]])
+                             for i in range(2)])
+        hull = shapely.MultiPoint(corners).convex_hull
+        stand_in = shapely.MultiPoint(np.column_stack([vx, vy])).convex_hull.buffer(rho, 256)
+        assert any(stand_in.buffer(1e-6).contains(g) for g in shapes)  # a superset
+        if hull.distance(stand_in) > 1e-6:
+            assert np.all(a[0] * corners[:, 0] + a[1] * corners[:, 1] >= b - 1e-9)
+
+
+def test_a_piece_round_a_wall_end_keeps_clear_of_it_in_the_replay():
+    """Round the first wall of the slalom (from the benchmark, where one half-plane per
+    piece made the problem infeasible): the replayed legs and body stay off the wall."""
+    wall = [[2.0, -4.0], [2.6, -4.0], [2.6, 0.0], [2.0, 0.0]]
+    world = world_from_dict({"name": "slalom", "bounds": {"x": [-6.0, 16.0], "y": [-4.0, 4.0]},
+                             "obstacles": [{"polygon": wall}]})
+    steering = BodyPathSteering(Checker(get_model("trident-snake"), world))
+    system = steering.checker.system
+    x = np.array([0.48, 1.11, -0.42, -0.57, -0.04, -0.37])
+    w = np.array([2.79, 0.90, -0.65, 0.0, 0.0, 0.0])
+    p = body_path_piece(steering, x, w, 1e-3, 40, final=False)
+    assert p is not None, steering.reason
+    q = resimulate(system, x, _json(p.segments), samples=40)
+    assert np.linalg.norm(q[-1, :3] - w[:3]) < 1e-3
+    pts = Robot(system).points(q)
+    block = shapely.Polygon(wall)
+    assert not shapely.intersects(block, shapely.linestrings(
+        pts["segments"].reshape(-1, 2, 2))).any()
+    assert not shapely.intersects(block, shapely.polygons(pts["polygons"][0])).any()
+    assert np.abs(q[:, 3:]).max() <= LIMIT
 
 
 def test_the_planner_refuses_another_model():

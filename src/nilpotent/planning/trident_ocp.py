@@ -22,10 +22,17 @@ the end: the waypoint's pose ``(x, y, θ)`` with the shape free (``λ``
 sub-step (tightened by :data:`LIMIT_MARGIN`); no leg touching another
 (``dist(W_i, leg_j) ≥`` :data:`LEG_GAP` for every ordered pair at every node: a leg's only
 free end is its wheel, a vertex is ``√3 r − l``-far from another leg when ``l < √3 r``);
-the world's obstacles and bounds as at most :data:`MAX_PLANES` half-planes
-(:meth:`BodyPathSteering.planes`) that every vertex and wheel keeps to at every node (the
-robot is inside their convex hull).  Those constraints are sufficient, not necessary, and
-hold at the nodes only: the motion is checked afterwards
+the world's bounds at every node, and its obstacles by separating lines: on each interval
+the :data:`SLOTS` obstacles nearest the reference motion (a straight drive's roll-out),
+each as a convex stand-in (:meth:`BodyPathSteering.separations`), lie beyond a line
+``a · p = b`` (``|a| ≤ 1``, variables of the problem, one per interval and obstacle) that
+every vertex and wheel keeps :data:`WORLD_MARGIN` from at every RK4 sub-step (the robot
+lies in their convex hull; the separating-hyperplane form of the distance between convex
+sets, Boyd & Vandenberghe, *Convex Optimization*, §8.2; TrajOpt, Schulman et al. 2014,
+imposes collision avoidance per time step the same way).  Those constraints are
+sufficient, not necessary, and hold at the sub-steps and nodes only (the first solver,
+one line per obstacle and piece at the nodes, made pieces round a wall's end infeasible or
+let a leg graze it between nodes: slalom 1 of 4 pairs); the motion is checked afterwards
 (:meth:`~nilpotent.planning.verify.Checker.valid_motion`, 20 samples per interval) and a
 piece that fails, or that IPOPT does not solve within :data:`SOLVE_SECONDS`
 (:data:`IPOPT_ITERATIONS` without a time limit), is handed back (``None``, the reason in
@@ -68,8 +75,8 @@ from nilpotent.planning.verify import Checker
 from nilpotent.simulation.trajectory import Trajectory
 
 __all__ = [
-    "END_ROOM", "EPSILON", "LEG_GAP", "MAX_PLANES", "MODELS", "PIECE", "REACH", "SHAPE_WEIGHT",
-    "TURN_WEIGHT", "WORLD_MARGIN", "BodyPathSteering", "body_path_piece",
+    "END_ROOM", "EPSILON", "FAR", "LEG_GAP", "MODELS", "PIECE", "REACH", "SHAPE_WEIGHT",
+    "SLOTS", "TURN_WEIGHT", "VERTICES", "WORLD_MARGIN", "BodyPathSteering", "body_path_piece",
 ]
 
 #: Models the steering applies to (body-velocity inputs: ``(u_1, u_2)`` is the body's velocity).
@@ -88,12 +95,19 @@ TURN_WEIGHT = 1e-4
 SHAPE_WEIGHT = 0.3
 #: An intermediate end's joints stay this far inside their limits (rad): room for the next.
 END_ROOM = 1.0
-#: Most half-planes of the world imposed on a piece (the nearest obstacles and bounds).
-MAX_PLANES = 6
-#: Distance the robot's vertices and wheels keep from those half-planes' obstacles.
+#: Obstacles imposed on each interval of a piece (the nearest to the reference motion).
+SLOTS = 3
+#: Most vertices of an obstacle's convex stand-in (more: its least rotated rectangle).
+VERTICES = 8
+#: An unused slot's point lies this far away (model length).
+FAR = 1e3
+#: Distance the hull of the robot's vertices and wheels keeps from the obstacles.
 WORLD_MARGIN = 0.05
-#: Obstacles further than this from a piece's chord (body centre) are not imposed.
-REACH = 4.0
+#: Intervals next to a fixed end (the start; the last piece's goal) that keep only half
+#: that end's clearance when it has less than :data:`WORLD_MARGIN`.
+END_INTERVALS = 3
+#: Obstacles further than this from an interval's reference motion are not imposed.
+REACH = 3.0
 #: Least distance from a wheel to another leg in the problem (model length).
 LEG_GAP = 0.1
 #: The limits are imposed tightened by this (rad).
@@ -149,6 +163,7 @@ class BodyPathSteering:
         names = checker.system.coordinate_names
         self.bounds = [(names.index(k), lo, hi) for k, lo, hi in checker.limits.bounds]
         self._flows: dict[int, Any] = {}
+        self._obstacles: list[tuple[np.ndarray, float, Any]] | None = None
         q = self.ca.SX.sym("q", 6)
         self._gap = self.ca.Function("gaps", [q], [self.ca.vertcat(*self._gaps(q))])
         self._points = self.ca.Function("points", [q], [self.ca.vertcat(*self._corners(q))])
@@ -156,6 +171,17 @@ class BodyPathSteering:
         self.seconds = 0.0
         #: Why the last piece was handed back (``""`` when it was driven).
         self.reason = ""
+
+    def _separation(self, n_int: int) -> Any:
+        """``(points (12, SUBSTEPS), a, b, stand-in (2V + 1), margin) ↦`` the slacks
+        ``a · p − b − margin`` of every vertex and wheel ``p`` of an interval's sub-step
+        states, and ``b − a · v − ρ`` of the stand-in's vertices (all ``≥ 0``)."""
+        ca = self.ca
+        pts, a, b = ca.SX.sym("p", 12, SUBSTEPS), ca.SX.sym("a", 2), ca.SX.sym("b")
+        o, m = ca.SX.sym("o", 2 * VERTICES + 1), ca.SX.sym("m")
+        robot = a[0] * pts[:6, :] + a[1] * pts[6:, :] - b - m
+        stand = b - a[0] * o[:VERTICES] - a[1] * o[VERTICES:2 * VERTICES] - o[-1]
+        return ca.Function("separation", [pts, a, b, o, m], [ca.vertcat(ca.vec(robot), stand)])
 
     def _flow(self, n_int: int) -> Any:
         if n_int not in self._flows:
@@ -203,43 +229,110 @@ class BodyPathSteering:
             ys_.append(ys_[i] + self.l * lib.sin(a + q[3 + i]))
         return xs_ + ys_
 
-    def planes(self, x: np.ndarray, w: np.ndarray) -> np.ndarray:
-        """Half-planes ``a · p ≥ b`` (rows ``(a_x, a_y, b)``, :data:`MAX_PLANES` of them) that
-        keep the robot's vertices and wheels, hence the robot, off the world's obstacles
-        and inside its bounds near the piece from ``x`` to ``w``: for each obstacle within
-        :data:`REACH` of the chord of the body centre, the line through its point nearest
-        the chord, normal to that direction, moved :data:`WORLD_MARGIN` off it (less where
-        the robot at ``x`` or at ``w`` is nearer: the piece's ends must satisfy them); for
-        the bounds, their sides.  A sufficient condition (the obstacle lies beyond its
-        line), not a necessary one; unused rows are ``(0, 0, −1)``."""
-        out = np.tile([0.0, 0.0, -1.0], (MAX_PLANES, 1))
+    def _stand_ins(self) -> list[tuple[np.ndarray, float, Any]]:
+        """The world's obstacles as convex stand-ins ``(vertices (V, 2), radius, shapely
+        shape)``: a polygon's convex hull (its least rotated rectangle when the hull has more
+        than :data:`VERTICES` vertices), a disc's centre repeated with its radius; a
+        superset of the obstacle, so that keeping clear of it is sufficient."""
+        if self._obstacles is not None:
+            return self._obstacles
+        out: list[tuple[np.ndarray, float, Any]] = []
         world = self.checker.world
-        if world is None:
-            return out
-        chord = shapely.LineString([x[:2], w[:2]]) if np.any(x[:2] != w[:2]) else \
-            shapely.Point(x[:2])
-        cands: list[tuple[float, np.ndarray, float]] = []
-        shapes = [shapely.Polygon(p) for p in world.polygons]
-        shapes += [shapely.Point(c).buffer(r, 64) for c, r in world.discs]
-        for g in shapes:
-            dist = float(chord.distance(g))
-            if 0 < dist <= REACH:
-                near_c, near_o = shapely.ops.nearest_points(chord, g)
-                n = np.array([near_c.x - near_o.x, near_c.y - near_o.y]) / dist
-                cands.append((dist, n, float(n @ [near_o.x, near_o.y]) + WORLD_MARGIN))
-        if world.bounds is not None:
-            (xlo, xhi), (ylo, yhi) = world.bounds
-            for n, b in (((1.0, 0.0), xlo), ((-1.0, 0.0), -xhi), ((0.0, 1.0), ylo),
-                         ((0.0, -1.0), -yhi)):
-                nn = np.array(n)
-                dist = float(min(nn @ x[:2], nn @ w[:2]) - b)
-                if dist <= REACH:
-                    cands.append((dist, nn, b + WORLD_MARGIN))
-        ends = np.array([self._corners(q, np) for q in (x, w)])  # (2, 12)
-        for k, (_, n, b) in enumerate(sorted(cands, key=lambda c: c[0])[:MAX_PLANES]):
-            least = float(np.min(n[0] * ends[:, :6] + n[1] * ends[:, 6:]))
-            out[k] = (n[0], n[1], min(b, least - 1e-6))
+        for poly in () if world is None else world.polygons:
+            hull = shapely.Polygon(poly).convex_hull
+            if len(hull.exterior.coords) - 1 > VERTICES:
+                hull = hull.minimum_rotated_rectangle
+            v = np.array(hull.exterior.coords)[:-1]
+            v = np.vstack([v, np.repeat(v[-1:], VERTICES - len(v), axis=0)])
+            out.append((v, 0.0, hull))
+        for c, r in () if world is None else world.discs:
+            out.append((np.tile(np.asarray(c, float), (VERTICES, 1)), float(r),
+                        shapely.Point(c).buffer(r, 64)))
+        self._obstacles = out
         return out
+
+    def separations(self, x: np.ndarray, w: np.ndarray, states: np.ndarray,
+                    final: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                          np.ndarray, int]:
+        """The obstacles imposed on each interval and a first guess of the lines that
+        separate them from the robot, along the reference ``states`` (6, N + 1).
+
+        For interval ``k``, the :data:`SLOTS` stand-ins (:meth:`_stand_ins`) nearest the
+        convex hull of the robot's vertices and wheels at the reference's nodes ``k`` and
+        ``k + 1``, within :data:`REACH`; each is kept at least the margin away from the
+        hull of the robot at every RK4 sub-step of the interval by a line ``a · p = b``
+        (``|a| ≤ 1``) of the problem's variables: every vertex and wheel ``a · p ≥ b +
+        margin``, the stand-in ``a · v + ρ ≤ b`` (the separating-hyperplane form of the
+        distance between convex sets, Boyd & Vandenberghe, *Convex Optimization*, §8.2).
+        An unused slot is a point :data:`FAR` away.
+
+        Returns ``(obstacles (2V + 1, S·N), a₀ (2, S·N), b₀ (1, S·N), box (4,), margin)``,
+        column ``s·N + k`` for slot ``s`` of interval ``k``; ``box``: the bounds less the
+        margin (``±FAR`` without bounds); ``margin``: :data:`WORLD_MARGIN`, or half the
+        clearance of the hull at ``x`` (at ``w`` too) when less.
+        """
+        n_int = states.shape[1] - 1
+        shapes = self._stand_ins()
+
+        def hull(q: np.ndarray) -> Any:
+            p = np.asarray(self._corners(q, np))
+            return shapely.MultiPoint(np.column_stack([p[:6], p[6:]])).convex_hull
+
+        hulls = [hull(q) for q in states.T]
+        # the fixed ends (the start; the goal of the last piece, whose shape is fixed too)
+        # keep half their clearance near them when they have less than the margin
+        ends = [WORLD_MARGIN, WORLD_MARGIN]
+        for e, h in enumerate((hulls[0], hull(w) if final else None)):
+            for _, _, g in shapes if h is not None else ():
+                ends[e] = min(ends[e], 0.5 * float(h.distance(g)))
+        steps = np.arange(n_int)
+        margins = np.where(steps < END_INTERVALS, ends[0], WORLD_MARGIN)
+        margins = np.where(steps >= n_int - END_INTERVALS, np.minimum(margins, ends[1]), margins)
+        segs, chosen = [], []
+        for k in range(n_int):
+            seg = shapely.union_all([hulls[k], hulls[k + 1]]).convex_hull
+            near = sorted((float(seg.distance(g)), i) for i, (_, _, g) in enumerate(shapes))
+            segs.append(seg)
+            chosen.append([i for d, i in near if d <= REACH][:SLOTS])
+        slots = max(len(c) for c in chosen)
+        cols = max(1, slots * n_int)
+        obs = np.zeros((2 * VERTICES + 1, cols))
+        a0, b0 = np.zeros((2, cols)), np.zeros((1, cols))
+        for k, seg in enumerate(segs):
+            centre = np.array(seg.centroid.coords[0])
+            for s in range(slots):
+                col = s * n_int + k
+                if s >= len(chosen[k]):
+                    obs[:VERTICES, col] = centre[0] + FAR
+                    obs[VERTICES:2 * VERTICES, col] = centre[1]
+                    a0[:, col] = (-1.0, 0.0)
+                    b0[0, col] = -(centre[0] + FAR / 2)
+                    continue
+                v, rho, g = shapes[chosen[k][s]]
+                obs[:VERTICES, col], obs[VERTICES:2 * VERTICES, col] = v[:, 0], v[:, 1]
+                obs[-1, col] = rho
+                dist = float(seg.distance(g))
+                if dist > 0:
+                    p_near, o_near = shapely.ops.nearest_points(seg, g)
+                    n = np.array([p_near.x - o_near.x, p_near.y - o_near.y]) / dist
+                    o = np.array([o_near.x, o_near.y])
+                else:  # the reference meets it: away from its centre
+                    o = np.array(g.centroid.coords[0])
+                    n = centre - o
+                    n = n / (np.linalg.norm(n) or 1.0)
+                    o = o + n * float(np.max((v - o) @ n) + rho)
+                a0[:, col] = n
+                b0[0, col] = float(n @ o) + 0.5 * dist
+        box = np.array([-FAR, FAR, -FAR, FAR])
+        world = self.checker.world
+        if world is not None and world.bounds is not None:
+            (xlo, xhi), (ylo, yhi) = world.bounds
+            ext = np.array([self._corners(q, np) for q in ((x, w) if final else (x,))])
+            m = WORLD_MARGIN
+            box = np.array([min(xlo + m, ext[:, :6].min()), max(xhi - m, ext[:, :6].max()),
+                            min(ylo + m, ext[:, 6:].min()), max(yhi - m, ext[:, 6:].max())])
+        margins = np.tile(margins, slots)[None, :] if slots else np.zeros((1, 1))
+        return obs, a0, b0, box, margins, slots
 
     def _guess(self, x: np.ndarray, w: np.ndarray, n_int: int) -> tuple[np.ndarray, np.ndarray]:
         """A straight drive at a constant world direction and turning rate, its RK4
@@ -257,12 +350,12 @@ class BodyPathSteering:
             states = x[:, None] + (w - x)[:, None] * np.linspace(0, 1, n_int + 1)[None, :]
         return u, states
 
-    def _solver(self, n_int: int, final: bool, wall: float) -> Any:
+    def _solver(self, n_int: int, final: bool, wall: float, slots: int) -> Any:
         """IPOPT on the problem of the module doc with ``N = n_int``, as a CasADi function
         ``(x, w, lower limits, upper limits, least gap², U₀, X₀) ↦ (U, X, success)``
         (:meth:`casadi.Opti.to_function`), built once per ``(N, final)`` (or for a shorter
         ``wall``)."""
-        key = (self.r, self.l, tuple(self.bounds), n_int, final, wall)
+        key = (self.r, self.l, tuple(self.bounds), n_int, final, wall, slots)
         if key in _SOLVERS:
             return _SOLVERS[key]
         ca = self.ca
@@ -273,7 +366,13 @@ class BodyPathSteering:
         x, w = opti.parameter(6), opti.parameter(6)
         nb = len(self.bounds)
         lo, hi, least = opti.parameter(nb), opti.parameter(nb), opti.parameter()
-        planes = opti.parameter(MAX_PLANES, 3)
+        cols = max(1, slots * n_int)  # (one unused column without obstacles)
+        obs, box, margin = opti.parameter(2 * VERTICES + 1, cols), opti.parameter(4), \
+            opti.parameter(1, cols)
+        sep_a, sep_b = opti.variable(2, cols), opti.variable(1, cols)
+        if not slots:
+            opti.subject_to(ca.vec(sep_a) == 0)
+            opti.subject_to(sep_b == 0)
         h = 1.0 / n_int
         cost = h * ca.sum2(ca.sqrt(us[0, :] ** 2 + us[1, :] ** 2 + EPSILON ** 2))
         cost += TURN_WEIGHT * h * ca.sumsqr(us[2, :])
@@ -289,18 +388,25 @@ class BodyPathSteering:
             if not final:
                 opti.subject_to(opti.bounded(lo_k + END_ROOM, xs[j, n_int], hi_k - END_ROOM))
         opti.subject_to(ca.vec(self._gap.map(n_int)(xs[:, 1:])) >= least)
-        pts = self._points.map(n_int)(xs[:, 1:])  # (12, N): x then y of 3 vertices, 3 wheels
-        for k in range(MAX_PLANES):
-            side = planes[k, 0] * pts[:6, :] + planes[k, 1] * pts[6:, :] - planes[k, 2]
-            opti.subject_to(ca.vec(side) >= 0)
+        # the world: the sub-step states' vertices and wheels inside the bounds, and each
+        # interval's stand-ins beyond its separating lines (:meth:`separations`)
+        nodes = self._points.map(n_int)(xs[:, 1:])  # (12, N)
+        opti.subject_to(opti.bounded(box[0], ca.vec(nodes[:6, :]), box[1]))
+        opti.subject_to(opti.bounded(box[2], ca.vec(nodes[6:, :]), box[3]))
+        if slots:
+            pts = self._points.map(n_int * SUBSTEPS)(subs)  # (12, N·SUBSTEPS)
+            opti.subject_to(ca.vec(self._separation(n_int).map(cols)(
+                ca.repmat(pts, 1, slots), sep_a, sep_b, obs, margin)) >= 0)
+            opti.subject_to(ca.vec(sep_a[0, :] ** 2 + sep_a[1, :] ** 2) <= 1)
         bound = STEP_BOUND * n_int
         opti.subject_to(opti.bounded(-bound, us, bound))
         opti.solver("ipopt", {"print_time": False, "expand": True, "error_on_fail": False},
                     {"print_level": 0, "max_iter": IPOPT_ITERATIONS, "tol": IPOPT_TOL, "sb": "yes",
                      "acceptable_tol": 1e-3, "acceptable_iter": 5,
                      "max_wall_time": wall})
-        solver = opti.to_function("trident_piece", [x, w, lo, hi, least, planes, us, xs],
-                                  [us, xs])
+        solver = opti.to_function(
+            "trident_piece", [x, w, lo, hi, least, obs, box, margin, us, xs, sep_a, sep_b],
+            [us, xs])
         _SOLVERS[key] = solver
         return solver
 
@@ -316,16 +422,17 @@ class BodyPathSteering:
         wall = (NO_LIMIT if not math.isfinite(left) else SOLVE_SECONDS
                 if 0.5 * left >= SOLVE_SECONDS else 2.0 ** math.floor(math.log2(
                     max(0.125, 0.5 * left))))
-        solver = self._solver(n_int, final, wall)
         lo = [min(lo + LIMIT_MARGIN, float(x[j])) for j, lo, _ in self.bounds]
         hi = [max(hi - LIMIT_MARGIN, float(x[j])) for j, _, hi in self.bounds]
         start_gap = float(np.sqrt(np.min(np.array(self._gap(x)))))
         least = min(LEG_GAP, 0.5 * start_gap) ** 2
         u0, s0 = self._guess(x, w, n_int) if warm is None else warm
+        obs, a0, b0, box, margin, slots = self.separations(x, w, s0, final)
+        solver = self._solver(n_int, final, wall, slots)
         t0 = time.perf_counter()
         self.solves += 1
         try:
-            u_out, _ = solver(x, w, lo, hi, least, self.planes(x, w), u0, s0)
+            u_out, _ = solver(x, w, lo, hi, least, obs, box, margin, u0, s0, a0, b0)
             stats = solver.stats()
         except RuntimeError as exc:
             self.seconds += time.perf_counter() - t0

@@ -24,7 +24,7 @@ import shapely
 
 from nilpotent.core.model.outline import Limits
 from nilpotent.core.model.system import ControlSystem
-from nilpotent.errors import OptionError
+from nilpotent.errors import IntegrationError, OptionError
 from nilpotent.numeric.settings import IntegrationSettings
 from nilpotent.numeric.types import State
 from nilpotent.planning.controls import Segment
@@ -401,21 +401,28 @@ def verify_segments(
     :data:`~nilpotent.planning.simulation.PLANNING_SETTINGS`: DOP853, rtol 1e-12), sample
     ``points_per_segment`` per segment, and measure the motion (:func:`verify_states`).
 
-    The ``error`` returned is a bound, not one integrator's number: the distance of the
-    re-simulated end to ``goal`` plus the distance between that end and the end of a second
-    re-simulation at ten times looser ``rtol`` and ``atol`` (an estimate of the integration
-    error of that looser run, which is larger than this run's: a conservative bound; a
-    tighter run can fall below the integrator's least step where this one does not).
+    The ``error`` returned is not one integrator's number: it is the distance of the
+    re-simulated end to ``goal`` plus an estimate of that run's integration error, the
+    distance between its end and the end of a second re-simulation at ten times tighter
+    ``rtol`` and ``atol`` (where that run cannot be made, e.g. its steps would fall below the
+    integrator's least step, the distance to a run at ten times looser tolerances, an
+    estimate of the looser run's error, which is larger).
     Ill-conditioned controls (a change of ``1e-9`` at the start moving the end ``10⁴``
     times as much, as optimal-control pieces fitted on one integrator can be) were reported
     within a ``tol`` of ``1e-8`` that an independent scipy replay missed by ``6e-8``; with
-    the bound (``9.5e-8`` for that plan) such a plan is refused instead."""
+    the estimate added such a plan is refused instead."""
     times, states = simulate_path(checker.system, start, list(segments), points_per_segment,
                                   settings, hard=True)  # a plan found in time: verified in time
     v = verify_states(checker, times, states, goal)
     if not segments:
         return v
-    loose = settings.replace(rtol=settings.rtol * 10, atol=settings.atol * 10)
-    _, ends = simulate_path(checker.system, start, list(segments), 2, loose, hard=True)
+    tight = settings.replace(rtol=settings.rtol / 10, atol=settings.atol / 10)
+    try:
+        _, ends = simulate_path(checker.system, start, list(segments), 2, tight, hard=True)
+    except IntegrationError:
+        loose = settings.replace(rtol=settings.rtol * 10, atol=settings.atol * 10)
+        _, ends = simulate_path(checker.system, start, list(segments), 2, loose, hard=True)
     spread = float(np.linalg.norm(ends[-1] - states[-1]))
+    if not math.isfinite(spread):
+        spread = math.inf
     return dataclasses.replace(v, error=v.error + spread)
