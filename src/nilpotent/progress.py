@@ -18,7 +18,10 @@ The bar:
   silence (``... (still running, 12 s)``) and a last one when a reported task ends;
 - where the total is known, the rate (units per second) and the estimated time left
   (on a terminal rich's :class:`~rich.progress.TimeRemainingColumn`; off a terminal
-  ``(12.3/s, about 40 s left)`` on each line);
+  ``(12.3/s, about 40 s left)`` on each line), the rate counted from the report that
+  gave the total (a plan's pieces steered after a long search: not the search's
+  seconds), and no estimate past the task's :attr:`Progress.deadline` (a time limit: then
+  ``time limit in 25 s``);
 - a task started while another runs (compiling the integrator during a sweep) is a
   second line of the same bar;
 - nothing at all until :func:`configure` enables it (the CLI does; a notebook or a
@@ -138,11 +141,21 @@ class Progress:
     _task: object | None = None
     _start: float = field(default=0.0)
     _emitted: bool = False
+    #: When the work stops at the latest (``time.monotonic()`` seconds: a time limit), or
+    #: ``None``; no estimate of the time left goes past it.
+    deadline: float | None = None
+    _base_time: float = 0.0
+    _base_done: int = 0
+    _rebase: bool = False  # the rich bar's own rate to restart (the count begins)
 
     def __call__(self, event: ProgressEvent, /) -> None:
         """Show ``event``: its counts, and its detail, or its stage when that is not the
         task's own description (the steps of a reproduction)."""
         if event.total is not None:
+            if self.total is None:
+                # the count begins (pieces steered after a search): its own rate
+                self._base_time, self._base_done = time.monotonic(), int(event.done)
+                self._rebase = True
             self.total = int(event.total)
         detail = event.detail or (event.stage if event.stage != self.description else "")
         self.update(event.done, detail or None)
@@ -167,10 +180,16 @@ class Progress:
             self.completed = int(completed)
         if detail is not None:
             self.detail = _plain_text(detail, 80)
-        if self._bar is not None:
+        if self._bar is not None and self._rebase:
+            self._rebase = False
+            self._bar.reset(  # type: ignore[attr-defined]
+                self._task, completed=self.completed, description=self._label(),
+                total=self.total, deadline=self.deadline,
+            )
+        elif self._bar is not None:
             self._bar.update(  # type: ignore[attr-defined]
                 self._task, completed=self.completed, description=self._label(),
-                total=self.total,
+                total=self.total, deadline=self.deadline,
             )
         elif self._stream is not None:
             now = time.monotonic()
@@ -183,18 +202,22 @@ class Progress:
         return text
 
     def rate(self) -> float | None:
-        """Units done per second since the task started (``None`` before the first)."""
-        elapsed = time.monotonic() - self._start
-        if self.completed <= 0 or elapsed <= 0 or not self._start:
+        """Units done per second since the count began (the task's start, or the first
+        report of the stage now counted; ``None`` before a unit is done in it)."""
+        begun = self._base_time or self._start
+        elapsed = time.monotonic() - begun
+        done = self.completed - self._base_done
+        if done <= 0 or elapsed <= 0 or not begun:
             return None
-        return self.completed / elapsed
+        return done / elapsed
 
     def remaining(self) -> float | None:
-        """Estimated seconds left, from the rate so far (``None`` without a total)."""
+        """Estimated seconds left, from the rate so far (``None`` without a total), at most
+        the seconds to the :attr:`deadline`."""
         speed = self.rate()
         if not self.total or speed is None:
             return None
-        return max(self.total - self.completed, 0) / speed
+        return _capped(max(self.total - self.completed, 0) / speed, self.deadline)
 
     def _emit(self, suffix: str = "") -> None:
         count = f"{self.completed}/{self.total}" if self.total else (
@@ -203,7 +226,12 @@ class Progress:
             speed, left = self.rate(), self.remaining()
             if speed is not None:
                 count += f" ({_format_rate(speed)}"
-                count += f", about {_format_seconds(left)} left)" if left is not None else ")"
+                if left is not None and self.deadline is not None and \
+                        left >= self.deadline - time.monotonic():
+                    count += f", time limit in {_format_seconds(left)})"
+                else:
+                    count += f", about {_format_seconds(left)} left)" if left is not None \
+                        else ")"
         line = f"nilpotent: {self._label()}{': ' if count else ''}{count}{suffix}\n"
         with _lock:
             self._emitted = True
@@ -214,6 +242,13 @@ class Progress:
                 self._stream.flush()
             except (OSError, ValueError):
                 self._stream = None  # stderr closed: stop reporting, never fail the work
+
+
+def _capped(seconds: float, deadline: float | None) -> float:
+    """``seconds`` left, at most those to ``deadline`` (``time.monotonic()``; at least 0)."""
+    if deadline is None:
+        return seconds
+    return max(0.0, min(seconds, deadline - time.monotonic()))
 
 
 def _format_rate(speed: float) -> str:
@@ -258,7 +293,14 @@ def rich_columns(total: int | None) -> list[object]:
 
     class RemainingColumn(TimeRemainingColumn):
         def render(self, task):  # type: ignore[override]
-            return Text("") if task.total is None else super().render(task)
+            if task.total is None:
+                return Text("")
+            deadline = task.fields.get("deadline")
+            left = task.time_remaining
+            if deadline is not None and left is not None and \
+                    left >= deadline - time.monotonic():
+                return Text(f"time limit in {_format_seconds(_capped(left, deadline))}")
+            return super().render(task)
 
     del total  # every task gets the same columns (a nested task may know its total)
     return [TextColumn("{task.description}"), BarColumn(), CountColumn(), RateColumn(),

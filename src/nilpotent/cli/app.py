@@ -16,10 +16,11 @@ Conventions for every command:
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
@@ -227,12 +228,24 @@ def print_heading(console: Any, name: str, rest: str) -> None:
     console.print(Text.assemble((literal(name), "bold"), rest))
 
 
-def work(description: str, total: int | None = None):
+@contextlib.contextmanager
+def work(description: str, total: int | None = None) -> Iterator[Any]:
     """Progress of one long step on stderr (:func:`nilpotent.progress.progress`): a rich
-    bar on a terminal, plain rate-limited lines otherwise, nothing under ``--quiet``."""
+    bar on a terminal, plain rate-limited lines otherwise, nothing under ``--quiet``; within
+    a time limit (:func:`nilpotent.planning.budget.time_budget`), no estimate of the time
+    left past it."""
+    import time
+
     from nilpotent.progress import progress
 
-    return progress(description, total)
+    # a budget is in force only once planning's budget module is loaded: no import here
+    # (the planning package is heavy for the commands that do not plan)
+    budget = sys.modules.get("nilpotent.planning.budget")
+    with progress(description, total) as bar:
+        limit = budget.current() if budget is not None else None
+        if limit is not None:
+            bar.deadline = time.monotonic() + limit.left(hard=True)
+        yield bar
 
 
 def load_model_option(spec: str, params: list[str] | None):

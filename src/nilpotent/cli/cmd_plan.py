@@ -259,7 +259,7 @@ def plan_command(
             "--trajectory-out" if trajectory_out is not None else "--trajectory-step")
         raise OptionError(f"{given} needs --max-accel (the re-timed inputs are continuous "
                           "only with bounded accelerations)")
-    with work(f"plan {system.name}"), command_budget(time_limit):
+    with command_budget(time_limit), work(f"plan {system.name}"):  # the bar sees the limit
         result = plan_from_options(
             system, start, goal, tol, world, limit, singular_margin, time_limit, seed,
             max_piece, anchor=anchor, max_iterations=max_iterations,

@@ -57,6 +57,7 @@ from nilpotent.numeric.settings import IntegrationSettings, resolve_settings
 from nilpotent.numeric.types import State
 from nilpotent.planning import budget
 from nilpotent.planning.controls import Segment
+from nilpotent.planning.grid_distance import refuse_unreachable
 from nilpotent.planning.holonomic_path import ompl_path
 from nilpotent.planning.iterative import Iteration, Plan, PlanFigure, Trajectory, plan
 from nilpotent.planning.nilpotent import StepTooHighError
@@ -567,6 +568,7 @@ def _plan_global(
         )
 
     stage = HolonomicStage(planner, max_piece, checker)  # the OMPL stage (path, cost)
+    refuse_unreachable(checker, x0, xg)  # a goal caged by obstacles, where decided soundly
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
                route: str, planner_s: float, last: Plan) -> GlobalPlan:

@@ -290,6 +290,32 @@ def _chord(valid: Callable[[np.ndarray], np.ndarray], a: np.ndarray, b: np.ndarr
     return bool(np.all(valid(a + t * (b - a))))
 
 
+def refuse_full_turn(names: Sequence[str], x0: np.ndarray, xg: np.ndarray) -> None:
+    """Refuse a goal whose headings (the coordinates ``theta…``: real numbers, not angles
+    modulo ``2π``) turn by a full turn or more from the start's: the Reeds–Shepp planners
+    do not plan such a turn (their curves join poses modulo ``2π``, the lattice bins its
+    headings so, and a path turning by another multiple than the goal's was searched for
+    the whole time limit); the message names the headings and the same pose less than a
+    full turn away.
+
+    Raises
+    ------
+    PlanningError
+        A heading of ``xg`` is ``2π`` or more from ``x0``'s.
+    """
+    at = [k for k, name in enumerate(names) if name.startswith("theta")]
+    turns = [float(xg[k] - x0[k]) for k in at]
+    if not turns or max(abs(t) for t in turns) < 2 * math.pi:
+        return
+    shift = 2 * math.pi * round(sum(turns) / len(turns) / (2 * math.pi))
+    listed = ", ".join(f"{names[k]} by {t:.4g}" for k, t in zip(at, turns, strict=True))
+    same = ",".join(f"{names[k]}={float(xg[k]) - shift:.6g}" for k in at)
+    raise PlanningError(
+        f"the goal's headings turn from the start's by a full turn or more ({listed} rad), "
+        "which --planner reeds-shepp does not plan (headings are real numbers, not angles "
+        f"modulo 2 pi; --to ...,{same} is the same pose less than a full turn away)")
+
+
 class HolonomicStage:
     """The holonomic stage of :func:`~nilpotent.planning.global_planner.plan_global` for a
     planner of :data:`PLANNERS`: :meth:`path` has the signature of
@@ -348,6 +374,8 @@ class HolonomicStage:
             from nilpotent.planning.trailer_guide import TrailerGeometry, trailer_guide_path
             from nilpotent.planning.trailer_lattice import LatticeGeometry, lattice_path
 
+            checker, x0, xg = args[:3]
+            refuse_full_turn(checker.system.coordinate_names, x0, xg)
             if isinstance(self.car, LatticeGeometry):
                 found = lattice_path(*args, **kwargs)
                 self.found.append(found)

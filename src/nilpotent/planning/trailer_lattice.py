@@ -15,7 +15,8 @@ the true system:
   (``θ̇0 = θ̇1``).  Trailer 1's axle centre ``P1 = P0 − d1 (cos θ1, sin θ1)`` runs on a
   circle of curvature ``κ = tan φ1 / d1`` for the arc length ``s1 = s0 cos φ1``, and
   trailer 2 follows as a caster: along ``s1``, ``dφ2/ds1 = κ − sin φ2 / d2``, a scalar
-  ODE with constant coefficients solved in closed form (:func:`hitch_flow`: with
+  ODE with constant coefficients solved in closed form (:func:`~nilpotent.planning.
+  trailer_hitch.hitch_flow`: with
   ``t = tan(φ2/2)`` a Riccati equation ``dt/ds1 = (κ t² − 2 t/d2 + κ)/2``).  Backwards
   the caster is unstable (``φ2`` leaves the equilibrium ``sin φ2 = κ d2``); each drive is
   short and checked against the hitch limits.
@@ -66,6 +67,7 @@ from nilpotent.core.model.system import ControlSystem
 from nilpotent.errors import ComputationLimitError, OptionError, PlanningError
 from nilpotent.planning import budget
 from nilpotent.planning.grid_distance import grid_distance
+from nilpotent.planning.trailer_hitch import hitch_flow, limit_slack, within_limits
 from nilpotent.planning.verify import Checker
 from nilpotent.progress import ProgressEvent
 from nilpotent.progress import report as report_progress
@@ -222,38 +224,6 @@ def lattice_geometry(system: ControlSystem, checker: Checker) -> LatticeGeometry
     return LatticeGeometry((d1, d2), phi_max)
 
 
-def hitch_flow(phi: float, kappa: float, d2: float, s: np.ndarray) -> np.ndarray:
-    r"""Trailer 2's hitch angle ``φ2(s)`` after trailer 1 has run the signed arc length
-    ``s`` (any shape) on a circle of curvature ``κ``, from ``φ2(0) = phi``: the solution of
-    $d\varphi/ds = \kappa - \sin\varphi / d_2$ in closed form (module doc).  With
-    $t = \tan(\varphi/2)$, $b = 1/d_2$: for $b^2 \ge \kappa^2$ the roots $r_1 = \kappa /
-    (b + \sqrt{b^2-\kappa^2})$, $r_2 = 1/r_1$ give $t = (r_1(r_1 t_0 - 1) - (t_0 - r_1)E) /
-    ((r_1 t_0 - 1) - r_1 (t_0 - r_1) E)$, $E = e^{-\sqrt{b^2-\kappa^2}\,s}$; for
-    $\kappa^2 > b^2$, $t = b/\kappa + c \tan(\kappa c s / 2 + \arctan((t_0 - b/\kappa)/c))$,
-    $c = \sqrt{\kappa^2-b^2}/|\kappa|$.  ``nan`` where ``φ2`` would pass ``±π``.
-    """
-    s = np.asarray(s, dtype=float)
-    b = 1.0 / d2
-    t0 = math.tan(phi / 2.0)
-    disc = b * b - kappa * kappa
-    if abs(disc) < 1e-12:  # a double root r = κ/b: 1/(t - r) = 1/(t0 - r) - κ s/2
-        r = kappa / b
-        den = 1.0 - kappa * s * (t0 - r) / 2.0
-        t = np.where(den > 0, r + (t0 - r) / np.where(den > 0, den, 1.0), np.nan)
-    elif disc > 0.0:
-        root = math.sqrt(disc)
-        r1 = kappa / (b + root)
-        e = np.exp(-root * s)
-        den = (r1 * t0 - 1.0) - r1 * (t0 - r1) * e  # r1² - 1 < 0 at s = 0; 0 at a pole
-        t = np.where(den < 0, (r1 * (r1 * t0 - 1.0) - (t0 - r1) * e) / np.where(
-            den < 0, den, -1.0), np.nan)
-    else:
-        c = math.sqrt(-disc) / abs(kappa)
-        arg = kappa * c * s / 2.0 + math.atan((t0 - b / kappa) / c)
-        t = np.where(np.abs(arg) < math.pi / 2, b / kappa + c * np.tan(arg), np.nan)
-    return 2.0 * np.arctan(t)
-
-
 def arc_states(q: np.ndarray, s1: np.ndarray, geometry: LatticeGeometry) -> np.ndarray:
     """States ``(len(s1), 5)`` of the drive with ``φ1 = θ0 − θ1`` held from ``q`` after
     trailer 1's signed arc lengths ``s1`` (module doc; closed form)."""
@@ -327,9 +297,13 @@ def _apply(q: np.ndarray, motions: Sequence[_Motion], geometry: LatticeGeometry,
     return q, samples
 
 
-def _admissible(checker: Checker, samples: Sequence[np.ndarray], margin: float) -> bool:
+def _admissible(checker: Checker, samples: Sequence[np.ndarray], margin: float,
+                slack: float) -> bool:
+    """Every sample admissible with ``margin`` (obstacles, bodies) and the limits kept
+    (``slack`` at the samples, and between them: :func:`within_limits`)."""
     rows = np.vstack(samples)
-    return bool(np.all(np.isfinite(rows)) and np.all(checker.valid(rows, *[margin] * 3)))
+    return bool(np.all(np.isfinite(rows)) and np.all(checker.valid(rows, margin, 0.0, margin))
+                and np.all(within_limits(checker, samples, slack)))
 
 
 def _pose(q: np.ndarray, which: int, geometry: LatticeGeometry) -> tuple[float, float, float]:
@@ -372,7 +346,9 @@ def final_approach(checker: Checker, q: np.ndarray, xg: np.ndarray, geometry: La
     from scipy.optimize import least_squares
 
     target = _reduced(xg, geometry)
-    soft = geometry.phi_max - APPROACH_SLACK
+    # |φ2| kept below phi_max - APPROACH_SLACK, or below the ends' own (near the limit)
+    soft = min(geometry.phi_max, max(geometry.phi_max - APPROACH_SLACK, abs(float(
+        q[3] - q[4])), abs(float(xg[3] - xg[4]))))
     world = checker.world
     probe = np.linspace(0.0, 1.0, APPROACH_PROBES + 1)[1:]
 
@@ -416,7 +392,9 @@ def final_approach(checker: Checker, q: np.ndarray, xg: np.ndarray, geometry: La
         margin = min(APPROACH_MARGIN, _margin(checker, np.asarray(q, dtype=float),
                                               np.asarray(xg, dtype=float)))
         end, samples = _apply(np.asarray(q, dtype=float), out, geometry, margin)
-        if _admissible(checker, samples, margin) and float(np.abs(end - xg).max()) < 1e-9:
+        slack = limit_slack(checker, margin, np.asarray(q, dtype=float), xg)
+        if _admissible(checker, samples, margin, slack) and float(
+                np.abs(end - xg).max()) < 1e-9:
             return out
     return None
 
@@ -451,34 +429,33 @@ def _children(checker: Checker, q: np.ndarray, sign: float, geometry: LatticeGeo
     """The admissible motions from ``q`` (each hitch angle of :data:`HITCH_ANGLES`, forwards
     and backwards), their end states and costs (module doc); one batch of samples checked."""
     rows: list[np.ndarray] = []
-    spans: list[tuple[_Motion, slice, slice, np.ndarray]] = []
-    size = 0
+    spans: list[tuple[_Motion, int, int]] = []  # the motion, its turn's and drive's rows
     held = float(q[2] - q[3])  # the hitch angle as it is: no turn (e.g. none has room)
     angles = HITCH_ANGLES if min(abs(held - a) for a in HITCH_ANGLES) < 1e-9 or \
         abs(held) > max(HITCH_ANGLES) else (*HITCH_ANGLES, held)
     for phi1 in angles:
         th0 = float(q[3] + phi1)
-        turn = turn_states(q, th0, TURN_STEP * margin / MARGIN)
-        rows.append(turn)
-        turned = slice(size, size + len(turn))
-        size += len(turn)
+        rows.append(turn_states(q, th0, TURN_STEP * margin / MARGIN))
+        turned = len(rows) - 1
         for s1 in (FORWARD_STEP, -REVERSE_STEP):
-            drive = _drive_samples(turn[-1], s1, geometry, margin)
-            rows.append(drive)
-            spans.append((_Motion(th0, s1), turned, slice(size, size + len(drive)), drive[-1]))
-            size += len(drive)
+            rows.append(_drive_samples(rows[turned][-1], s1, geometry, margin))
+            spans.append((_Motion(th0, s1), turned, len(rows) - 1))
     flat = np.vstack(rows)
     ok = np.all(np.isfinite(flat), axis=1)
-    ok[ok] = checker.valid(flat[ok], margin, margin, margin)
+    ok[ok] = checker.valid(flat[ok], margin, 0.0, margin)
+    # the hitch limits: as near as q is at most, and between the samples (trailer_hitch)
+    row_ok = within_limits(checker, rows, limit_slack(checker, margin, q))
+    for k, part in enumerate(np.split(ok, np.cumsum([len(r) for r in rows])[:-1])):
+        row_ok[k] &= bool(part.all())
     out = []
-    for m, turned, driven, end in spans:
-        if not (ok[turned].all() and ok[driven].all()):
+    for m, turned, driven in spans:
+        if not (row_ok[turned] and row_ok[driven]):
             continue
         step = abs(m.s1) * (1.0 if m.s1 > 0 else REVERSE_COST)
         step += TURN_COST * abs(m.theta0 - float(q[2]))
         if sign and sign != math.copysign(1.0, m.s1):
             step += SWITCH_COST
-        out.append((m, end, step))
+        out.append((m, rows[driven][-1], step))
     return out
 
 
@@ -527,7 +504,8 @@ def lattice_path(checker: Checker, x0: np.ndarray, xg: np.ndarray, seconds: floa
     OptionError
         The model is not a car with two trailers (:func:`lattice_geometry`).
     PlanningError
-        Every reachable bin was expanded without an exact approach to the goal.
+        Every reachable bin was expanded without joining the start exactly (one: no motion
+        of the lattice leaves the goal, what constrains it there named).
     ComputationLimitError
         ``seconds`` ran out.
     """
@@ -557,8 +535,9 @@ def lattice_path(checker: Checker, x0: np.ndarray, xg: np.ndarray, seconds: floa
     while heap:
         if time.perf_counter() - t0 > seconds:
             raise ComputationLimitError(
-                f"the lattice search for the car with two trailers found no path in "
-                f"{seconds:.3g} s ({expanded} nodes expanded); raise --time-limit")
+                f"no path found within the budget: the lattice search for the car with two "
+                f"trailers expanded {expanded} nodes in {seconds:.3g} s without joining the "
+                "start; raise --time-limit (whether the goal can be reached was not decided)")
         budget.check("searching the lattice of exact motions")
         _, i = heapq.heappop(heap)
         q = states[i]
@@ -598,8 +577,14 @@ def lattice_path(checker: Checker, x0: np.ndarray, xg: np.ndarray, seconds: floa
             via.append(m)
             sign.append(math.copysign(1.0, m.s1))
             heapq.heappush(heap, (cost[-1] + HEURISTIC_WEIGHT * h(child), len(states) - 1))
+    if expanded == 1:  # not "every reachable bin": no motion of the lattice leaves the goal
+        raise PlanningError(
+            f"no motion of the lattice search for the car with two trailers leaves the goal "
+            f"(turns at rest to theta0 - theta1 in {list(HITCH_ANGLES)}, then drives of "
+            f"+-{FORWARD_STEP:g} of trailer 1, margin {_margin(checker, root):.3g} from the "
+            f"obstacles and bodies): at the goal {checker.constraints_near(root, 0.1)}")
     raise PlanningError(f"the lattice search for the car with two trailers expanded every "
-                        f"reachable bin ({expanded}) without an exact approach to the goal "
+                        f"reachable bin ({expanded}) without joining the start exactly "
                         f"({tried} tried)")
 
 

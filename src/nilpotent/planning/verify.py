@@ -32,7 +32,7 @@ from nilpotent.planning.robot import Robot, singular_margin_function
 from nilpotent.planning.simulation import PLANNING_SETTINGS, simulate_path
 from nilpotent.planning.world import World
 
-__all__ = ["NEAR", "Checker", "Verification", "verify_segments", "verify_states"]
+__all__ = ["NEAR", "Checker", "Verification", "limits_between", "verify_segments", "verify_states"]
 
 #: How near a constraint must be to be named by :meth:`Checker.constraints_near` (model
 #: units / radians): about the reach of a steered piece of the shortest length.
@@ -207,15 +207,8 @@ class Checker:
             if len(q) < 2:
                 return True
         assert self.limits is not None
-        if self.limits:
-            g, lo, hi = self.limit_values(q)
-            if not np.all(np.isfinite(g)):
-                return False
-            bend = _bend(g)
-            for m in (g - lo, hi - g):
-                root = np.sqrt(np.maximum(m, 0.0))
-                if not np.all(root[:-1] + root[1:] >= np.sqrt(bend)):
-                    return False
+        if self.limits and not limits_between(*self.limit_values(q)):
+            return False
         if self.world is None and not robot.has_self_collision:
             return True
         pts = robot.points(q)
@@ -368,6 +361,25 @@ def verify_states(
         self_clearance=float(self_clear.min()) if self_clear is not None else None,
         self_collision_ok=bool(self_clear is None or np.all(self_clear > 0)),
     )
+
+
+def limits_between(g: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
+    """Whether limited quantities ``g (N, K)`` sampled along one continuous motion (evenly
+    in time; :meth:`Checker.limit_values`) keep within ``[lo, hi] (K,)`` at the samples and
+    between them: the limit test of :meth:`Checker.valid_motion`, ``√a + √b ≥ √E`` per
+    interval (``a, b`` the two samples' margins to a bound, ``E`` the interpolation error's
+    estimate), so that a motion starting or ending on a bound and staying inside passes."""
+    g = np.atleast_2d(np.asarray(g, dtype=float))
+    if not np.all(np.isfinite(g)):
+        return False
+    bend = np.sqrt(_bend(g)) if len(g) > 1 else np.zeros((0, g.shape[1]))
+    for m in (g - lo, hi - g):
+        if not np.all(m >= 0.0):
+            return False
+        root = np.sqrt(m)
+        if not np.all(root[:-1] + root[1:] >= bend):
+            return False
+    return True
 
 
 def _bend(values: np.ndarray) -> np.ndarray:

@@ -190,6 +190,26 @@ class World:
         """:meth:`clearance` of points ``(..., 2)``."""
         return self.clearance(np.asarray(shapely.points(np.asarray(xy, dtype=float))))
 
+    def covers_boxes(self, lo: np.ndarray, hi: np.ndarray, margin: float = 0.0) -> np.ndarray:
+        """Whether no point of each closed box ``[lo, hi]`` (``(N, 2)`` corners) has a
+        :meth:`clearance` above ``margin`` ``≥ 0``, ``(N,)``: the box lies within the
+        obstacles and the outside of the bounds grown by ``margin`` (shapely's buffer, whose
+        round corners are inscribed: less than the true growth), or within one obstacle
+        disc grown by ``margin``.  Sound one way: ``True`` only where it is so (a box
+        covered by several discs together, or by a disc and a polygon, reads ``False``)."""
+        lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+        out = np.zeros(len(lo), dtype=bool)
+        if self._blocked is not None:
+            grown = self._blocked.buffer(margin) if margin > 0 else self._blocked
+            shapely.prepare(grown)
+            boxes = shapely.box(lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1])
+            out |= shapely.covers(grown, boxes)
+        corners = np.stack([lo, hi, np.c_[lo[:, 0], hi[:, 1]], np.c_[hi[:, 0], lo[:, 1]]], 1)
+        for (cx, cy), r in self.discs:  # a disc is convex: its corners in it, the box too
+            reach = np.hypot(corners[..., 0] - cx, corners[..., 1] - cy)
+            out |= np.all(reach <= r + margin, axis=1)
+        return out
+
     def to_json(self) -> dict[str, Any]:
         """The world as a world-file structure (JSON-ready)."""
         out: dict[str, Any] = {"name": self.name}
