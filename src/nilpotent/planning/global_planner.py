@@ -587,8 +587,9 @@ def _plan_global(
             )
         if not v.error <= tol:
             raise PlanningError(f"the re-simulated plan misses the goal by {v.error:.3g} > tol "
-                                f"{tol:g} (a bound: the end's error plus its spread to a "
-                                "looser re-simulation; a tol near 1e-12 cannot be certified)")
+                                f"{tol:g} (the end's error plus an estimate of the integration "
+                                "error, its distance to a tighter re-simulation; a tol near "
+                                "1e-12 cannot be certified)")
         whole = Plan(
             system=sys, start=tuple(x0), goal=tuple(xg), segments=tuple(segments),
             reached=v.reached, error=v.error, iterations=tuple(iterations),

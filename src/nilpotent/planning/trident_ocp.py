@@ -32,7 +32,13 @@ sets, Boyd & Vandenberghe, *Convex Optimization*, §8.2; TrajOpt, Schulman et al
 imposes collision avoidance per time step the same way).  Those constraints are
 sufficient, not necessary, and hold at the sub-steps and nodes only (the first solver,
 one line per obstacle and piece at the nodes, made pieces round a wall's end infeasible or
-let a leg graze it between nodes: slalom 1 of 4 pairs); the motion is checked afterwards
+let a leg graze it between nodes: slalom 1 of 4 pairs); no leg balanced ahead of its
+joint: a perturbation of a joint grows by at most ``e^``:data:`LEG_GROWTH` from any time of
+the piece to its end (:meth:`BodyPathSteering._leg_rates`; without it the optimum drove a
+corridor with a leg straight ahead, an unstable equilibrium whose end moved 5·10⁷ times a
+change of that joint, beyond what any integrator certifies).  IPOPT starts from the line
+of states from ``x`` to ``w`` (:meth:`BodyPathSteering.line`), then, if it finds no
+solution, from a straight drive's roll-out.  The motion is checked afterwards
 (:meth:`~nilpotent.planning.verify.Checker.valid_motion`, 20 samples per interval) and a
 piece that fails, or that IPOPT does not solve within :data:`SOLVE_SECONDS`
 (:data:`IPOPT_ITERATIONS` without a time limit), is handed back (``None``, the reason in
@@ -66,7 +72,7 @@ import shapely.ops
 
 from nilpotent.errors import ComputationLimitError, IntegrationError, OptionError
 from nilpotent.planning import budget
-from nilpotent.planning.casadi_tree import casadi_module
+from nilpotent.planning.casadi_tree import casadi_module, to_casadi
 from nilpotent.planning.controls import Segment, constant_segment
 from nilpotent.planning.iterative import Plan
 from nilpotent.planning.ocp_smooth import correct_endpoint, rk4_interval
@@ -84,7 +90,7 @@ MODELS = ("trident-snake",)
 #: Default longest piece (configuration-space length) of the holonomic path.
 PIECE = 3.0
 #: Shooting intervals of every piece (one IPOPT problem, built once per process).
-INTERVALS = 36
+INTERVALS = 24
 #: RK4 steps per interval.
 SUBSTEPS = 3
 #: Smoothing of the speed ``√(|v|² + ε²)`` (model length per unit time of the horizon).
@@ -112,16 +118,27 @@ REACH = 3.0
 LEG_GAP = 0.1
 #: The limits are imposed tightened by this (rad).
 LIMIT_MARGIN = 0.03
+#: Most growth ``∫_t^T ∂φ̇_i/∂φ_i`` of a perturbation of a joint, from any time of a piece to
+#: its end (:meth:`BodyPathSteering._leg_rates`): without it IPOPT balances a leg straight
+#: ahead of its joint, an unstable equilibrium (a corridor plan whose end moved 5·10⁷ times
+#: a change of φ₂ at the start, so that integrators at rtol 1e-12 disagreed by 1e-6 at the
+#: end).
+LEG_GROWTH = 2.0
 #: Largest body displacement / turn per interval (RK4 accuracy).
 STEP_BOUND = 0.25
 #: Most seconds of one IPOPT solve under a time limit (less when less time is left: half
 #: of it); without a time limit, :data:`NO_LIMIT` (the iterations bound it).
 SOLVE_SECONDS = 20.0
 NO_LIMIT = 1e6
+#: The shorter wall times of a solve, when less than ``2 × SOLVE_SECONDS`` is left.
+WALLS = (4.0, 1.0, 0.25)
 #: Most IPOPT iterations per solve, and most Gauss–Newton corrections of the last piece.
 IPOPT_ITERATIONS = 400
 #: IPOPT's tolerance (the end is met to its constraint tolerance, then corrected).
-IPOPT_TOL = 1e-4
+IPOPT_TOL = 1e-3
+#: IPOPT's options (besides its iterations and wall time).
+IPOPT_OPTIONS = {"print_level": 0, "sb": "yes", "tol": IPOPT_TOL, "acceptable_tol": 1e-2,
+                 "acceptable_iter": 5}
 CORRECTIONS = 8
 
 
@@ -182,6 +199,21 @@ class BodyPathSteering:
         robot = a[0] * pts[:6, :] + a[1] * pts[6:, :] - b - m
         stand = b - a[0] * o[:VERTICES] - a[1] * o[VERTICES:2 * VERTICES] - o[-1]
         return ca.Function("separation", [pts, a, b, o, m], [ca.vertcat(ca.vec(robot), stand)])
+
+    def _leg_rates(self) -> Any:
+        """``(q, u) ↦ (∂φ̇_i/∂φ_i)_{i=1..3}``: the growth rate of a perturbation of each
+        joint.  Given the body velocities, each ``φ_i`` obeys a scalar equation
+        ``φ̇_i = g_i(φ_i, θ, u)`` and the pose does not depend on the joints, so a change
+        ``δ`` of ``φ_i`` at ``t`` reaches the end as ``δ exp(∫_t^T ∂g_i/∂φ_i)``: a leg
+        pushed ahead of its joint (a leading caster) grows it like ``e^{|v| t / l}``."""
+        ca, system = self.ca, self.checker.system
+        q, v = ca.SX.sym("q", system.n), ca.SX.sym("v", system.m)
+        symbols = {c: q[i] for i, c in enumerate(system.coordinates)}
+        cols = [ca.vertcat(*[to_casadi(e, symbols) for e in fld])
+                for fld in system.specialized_fields]
+        f = sum((cols[i] * v[i] for i in range(1, system.m)), cols[0] * v[0])
+        return ca.Function("leg_rates", [q, v],
+                           [ca.vertcat(*[ca.jacobian(f[3 + i], q[3 + i]) for i in range(3)])])
 
     def _flow(self, n_int: int) -> Any:
         if n_int not in self._flows:
@@ -334,6 +366,18 @@ class BodyPathSteering:
         margins = np.tile(margins, slots)[None, :] if slots else np.zeros((1, 1))
         return obs, a0, b0, box, margins, slots
 
+    def line(self, x: np.ndarray, w: np.ndarray, n_int: int) -> tuple[np.ndarray, np.ndarray]:
+        """The states on the segment from ``x`` to ``w`` (the shape too) at the nodes and the
+        body velocities that move the pose along it: ``(controls (3, N), states (6, N + 1))``
+        (not a motion of the robot: a start for IPOPT, which pieces that fail from the
+        roll-out of :meth:`_guess` mostly solve from)."""
+        states = x[:, None] + (w - x)[:, None] * np.linspace(0.0, 1.0, n_int + 1)[None, :]
+        v = np.diff(states[:3], axis=1) * n_int  # world velocity and turning rate
+        th = states[2, :-1]
+        u = np.vstack([np.cos(th) * v[0] + np.sin(th) * v[1],
+                       -np.sin(th) * v[0] + np.cos(th) * v[1], v[2]])
+        return u, states
+
     def _guess(self, x: np.ndarray, w: np.ndarray, n_int: int) -> tuple[np.ndarray, np.ndarray]:
         """A straight drive at a constant world direction and turning rate, its RK4
         roll-out (the legs trail): ``(controls (3, N), states (6, N + 1))``."""
@@ -398,12 +442,16 @@ class BodyPathSteering:
             opti.subject_to(ca.vec(self._separation(n_int).map(cols)(
                 ca.repmat(pts, 1, slots), sep_a, sep_b, obs, margin)) >= 0)
             opti.subject_to(ca.vec(sep_a[0, :] ** 2 + sep_a[1, :] ** 2) <= 1)
+        # every leg's perturbation grows by at most e^LEG_GROWTH from any time to the end
+        # (trapezoid rule on the nodes; suffix sums by an upper-triangular matrix of ones)
+        rates = self._leg_rates().map(n_int)
+        lam = 0.5 * h * (rates(xs[:, :n_int], us) + rates(xs[:, 1:], us))  # (3, N)
+        suffix = ca.DM(np.tril(np.ones((n_int, n_int))))  # [j, k] = 1 for j >= k
+        opti.subject_to(ca.vec(ca.mtimes(lam, suffix)) <= LEG_GROWTH)
         bound = STEP_BOUND * n_int
         opti.subject_to(opti.bounded(-bound, us, bound))
         opti.solver("ipopt", {"print_time": False, "expand": True, "error_on_fail": False},
-                    {"print_level": 0, "max_iter": IPOPT_ITERATIONS, "tol": IPOPT_TOL, "sb": "yes",
-                     "acceptable_tol": 1e-3, "acceptable_iter": 5,
-                     "max_wall_time": wall})
+                    {**IPOPT_OPTIONS, "max_iter": IPOPT_ITERATIONS, "max_wall_time": wall})
         solver = opti.to_function(
             "trident_piece", [x, w, lo, hi, least, obs, box, margin, us, xs, sep_a, sep_b],
             [us, xs])
@@ -417,11 +465,11 @@ class BodyPathSteering:
         ``warm``: the start ``(controls (3, N), states (6, N + 1))`` (default: a straight
         drive's roll-out)."""
         left = budget.seconds_left()
-        # no time limit: IPOPT_ITERATIONS bounds the solve; else at most SOLVE_SECONDS
-        # (a power of 2 below that: each wall time is a solver of its own, built once)
-        wall = (NO_LIMIT if not math.isfinite(left) else SOLVE_SECONDS
-                if 0.5 * left >= SOLVE_SECONDS else 2.0 ** math.floor(math.log2(
-                    max(0.125, 0.5 * left))))
+        # no time limit: IPOPT_ITERATIONS bounds the solve; else at most SOLVE_SECONDS, or
+        # the largest of WALLS within half the time left (each wall time is a solver of
+        # its own, built once: few of them)
+        wall = (NO_LIMIT if not math.isfinite(left) else
+                next((t for t in (SOLVE_SECONDS, *WALLS) if t <= 0.5 * left), WALLS[-1]))
         lo = [min(lo + LIMIT_MARGIN, float(x[j])) for j, lo, _ in self.bounds]
         hi = [max(hi - LIMIT_MARGIN, float(x[j])) for j, _, hi in self.bounds]
         start_gap = float(np.sqrt(np.min(np.array(self._gap(x)))))
@@ -490,7 +538,12 @@ def body_path_piece(steering: BodyPathSteering, x: np.ndarray, w: np.ndarray, to
     checker = steering.checker
     n_int = INTERVALS
     budget.check("steering a trident piece by optimal control")
-    u, status = steering.solve(x, w, final, n_int)
+    # from the line of states first, then (where IPOPT did not run out of time) from the
+    # roll-out of a straight drive: each solves pieces that the other finds infeasible
+    u, status = steering.solve(x, w, final, n_int, steering.line(x, w, n_int))
+    if u is None and "Time" not in status:
+        budget.check("steering a trident piece by optimal control")
+        u, status = steering.solve(x, w, final, n_int)
     if u is None:
         steering.reason = f"IPOPT found no solution ({status})"
         return None

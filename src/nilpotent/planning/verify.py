@@ -316,7 +316,7 @@ class Verification:
         Every sample admissible for the checker.
     reached, error:
         Last state and its distance to the goal (from :func:`verify_segments`: plus the
-        integration error estimated by a second, looser re-simulation).
+        integration error estimated by a second, tighter re-simulation).
     self_clearance:
         Minimum distance between two bodies that must not touch (``≤ 0``: a
         self-collision); ``None`` where the model names no such pair.
