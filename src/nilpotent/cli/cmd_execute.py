@@ -96,7 +96,7 @@ def execute_command(
     time_limit: TimeLimitOpt = 60.0,
     seed: SeedOpt = 0,
     max_piece: MaxPieceOpt = 1.0,
-    planner: PlannerOpt = "rrtconnect",
+    planner: PlannerOpt = "auto",
     mismatch: MismatchOpt = None,
     noise: NoiseOpt = 0.0,
     tol: ExecTolOpt = 1e-3,

@@ -195,7 +195,7 @@ def plan_command(
     anchor: AnchorOpt = "auto",
     max_iterations: MaxItOpt = 30,
     objective: ObjectiveOpt = "reach",
-    planner: PlannerOpt = "rrtconnect",
+    planner: PlannerOpt = "auto",
     refine: RefineOpt = "none",
     input_weights: InputWeightsOpt = None,
     refine_starts: RefineStartsOpt = None,

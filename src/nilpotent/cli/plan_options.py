@@ -70,8 +70,10 @@ ClearanceOpt = Annotated[
 PlannerOpt = Annotated[
     str,
     typer.Option("--planner", metavar="NAME",
-                 help="Holonomic stage: rrtconnect (OMPL RRTConnect, shortest Euclidean path; "
-                      "default), rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
+                 help="Holonomic stage: auto (default: reeds-shepp for car-like models, "
+                      "trident-ocp for trident-snake when CasADi is installed, else "
+                      "rrtconnect), rrtconnect (OMPL RRTConnect, shortest Euclidean path), "
+                      "rrtstar (OMPL RRT* under the sub-Riemannian ball-box cost, "
                       "anytime), reeds-shepp (car-like models, and car-trailers:1 through "
                       "its trailer: an OMPL Reeds-Shepp path lifted to the model's "
                       "configurations; car-trailers:2: a lattice search over exact "

@@ -96,8 +96,7 @@ VERIFY_POINTS = 100
 #: Samples per segment of the second, denser check of a piece whose samples are all
 #: admissible but whose cover between samples (Checker.valid_motion) was too wide.
 DENSE_CHECK_POINTS = 200
-#: The direct attempt (one nilpotent plan, the old behaviour) is made for goals this close
-#: (configuration-space Euclidean distance).
+#: The direct attempt (one nilpotent plan) is made for goals this close (Euclidean distance).
 DIRECT_RADIUS = 2.0
 #: Configurations checked at once along a straight chord (memory).
 CHORD_CHUNK = 20_000
@@ -407,7 +406,7 @@ def plan_global(
     max_accel: float | Sequence[float] | dict[str, float] | None = None,
     trajectory_step: float | None = None,
     settings: IntegrationSettings | None = None,
-    planner: str = "rrtconnect",
+    planner: str = "auto",
 ) -> GlobalPlan:
     """Plan from ``start`` to ``goal`` within ``limits``, outside the ``world``'s obstacles.
 
@@ -481,8 +480,8 @@ def plan_global(
         Largest time between the samples of the re-timed motion (default: its
         duration / 500).
     planner:
-        ``"rrtconnect"``, ``"rrtstar"``, ``"reeds-shepp"`` (car-like models) or ``"trident-ocp"``
-        (``trident-snake``): :class:`~nilpotent.planning.optimal_planner.HolonomicStage`.
+        ``"auto"`` (the best for the model), ``"rrtconnect"``, ``"rrtstar"``, ``"reeds-shepp"``
+        or ``"trident-ocp"``: :class:`~nilpotent.planning.optimal_planner.HolonomicStage`.
 
     Raises
     ------
@@ -541,7 +540,7 @@ def _plan_global(
     hold_shape: bool,
     objective: str,
     refine: str | OcpRefine,
-    planner: str = "rrtconnect",
+    planner: str = "auto",
 ) -> GlobalPlan:
     t0 = time.perf_counter()
     if not (tol > 0 and math.isfinite(tol)):
@@ -568,6 +567,7 @@ def _plan_global(
         )
 
     stage = HolonomicStage(planner, max_piece, checker)  # the OMPL stage (path, cost)
+    planner = stage.planner  # "auto": the one chosen
     refuse_unreachable(checker, x0, xg)  # a goal caged by obstacles, where decided soundly
 
     def finish(segments: list[Segment], iterations: list[Iteration], waypoints, pieces,
@@ -587,9 +587,8 @@ def _plan_global(
             )
         if not v.error <= tol:
             raise PlanningError(f"the re-simulated plan misses the goal by {v.error:.3g} > tol "
-                                f"{tol:g} (the end's error plus an estimate of the integration "
-                                "error, its distance to a tighter re-simulation; a tol near "
-                                "1e-12 cannot be certified)")
+                                f"{tol:g} (with an estimate of the integration error added; a "
+                                "tol near 1e-12 cannot be certified)")
         whole = Plan(
             system=sys, start=tuple(x0), goal=tuple(xg), segments=tuple(segments),
             reached=v.reached, error=v.error, iterations=tuple(iterations),

@@ -41,6 +41,7 @@ global planner (nothing here is returned unverified).
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import itertools
 import math
 import time
@@ -64,8 +65,9 @@ __all__ = [
 ]
 
 #: Global planners of :func:`~nilpotent.planning.global_planner.plan_global`: the holonomic
-#: stage's OMPL planner.
-PLANNERS = ("rrtconnect", "rrtstar", "reeds-shepp", "trident-ocp")
+#: stage's OMPL planner; ``"auto"`` (the default) stands for the one that plans best for the
+#: model (:meth:`HolonomicStage.__init__`).
+PLANNERS = ("auto", "rrtconnect", "rrtstar", "reeds-shepp", "trident-ocp")
 #: Share of the time left that the Reeds–Shepp guide may take (the others: half).
 GUIDE_SHARE = 0.8
 #: The share of its time that RRT* spends improving its first path (:class:`HolonomicStage`).
@@ -316,6 +318,31 @@ def refuse_full_turn(names: Sequence[str], x0: np.ndarray, xg: np.ndarray) -> No
         f"modulo 2 pi; --to ...,{same} is the same pose less than a full turn away)")
 
 
+def _car(checker: Checker) -> Any:
+    """The Reeds–Shepp guide's geometry of the model (OptionError: not car-like)."""
+    from nilpotent.planning.guide import car_geometry
+    from nilpotent.planning.trailer_guide import TRAILER_COORDINATES, trailer_geometry
+    from nilpotent.planning.trailer_lattice import is_lattice_model, lattice_geometry
+
+    # the trailer as a car (trailer_guide); a model with a trailer's coordinates that is not
+    # one is refused with the trailer's reason, not the car's; two trailers: the lattice
+    # search over exact motions (trailer_lattice)
+    if is_lattice_model(checker.system):
+        return lattice_geometry(checker.system, checker)
+    if checker.system.coordinate_names == TRAILER_COORDINATES:
+        return trailer_geometry(checker.system, checker)
+    return car_geometry(checker.system, checker)
+
+
+def _not_car_like(checker: Checker) -> str:
+    """What ``"auto"`` stands for where the model is not car-like (:class:`HolonomicStage`)."""
+    from nilpotent.planning.trident_ocp import MODELS
+
+    if checker.system.name in MODELS and importlib.util.find_spec("casadi") is not None:
+        return "trident-ocp"
+    return "rrtconnect"
+
+
 class HolonomicStage:
     """The holonomic stage of :func:`~nilpotent.planning.global_planner.plan_global` for a
     planner of :data:`PLANNERS`: :meth:`path` has the signature of
@@ -324,6 +351,13 @@ class HolonomicStage:
     of its time, edges cut into pieces of ``piece``), for ``"reeds-shepp"``
     :func:`~nilpotent.planning.guide.guide_path` (car-like models only, checked here when
     ``checker`` is given), and keeps each result in ``found``.
+
+    ``"auto"`` chooses (``planner`` then names the choice): ``"reeds-shepp"`` where the
+    model is car-like (``car``, ``car-trailers:1`` and ``:2``: every piece driven exactly,
+    lengths 0.87–1.09× OMPL's Reeds–Shepp RRT* on the benchmark), ``"trident-ocp"`` for
+    ``trident-snake`` when CasADi is installed (body path 1.4–2× the holonomic path where
+    the nilpotent steering of pieces drives 19–26×), else ``"rrtconnect"`` (every other
+    model: the nilpotent steering of straight pieces), benchmarks/RESULTS.md.
 
     Raises
     ------
@@ -337,21 +371,17 @@ class HolonomicStage:
     def __init__(self, planner: str, piece: float, checker: Checker | None = None) -> None:
         if planner not in PLANNERS:
             raise OptionError(f"unknown planner {planner!r} (choose from {', '.join(PLANNERS)})")
+        auto = planner == "auto"
+        if auto:
+            planner = "reeds-shepp" if checker is not None else "rrtconnect"
         self.car: Any = None  # the guide's CarGeometry, once (refuses a model not car-like)
         if planner == "reeds-shepp" and checker is not None:
-            from nilpotent.planning.guide import car_geometry
-            from nilpotent.planning.trailer_guide import TRAILER_COORDINATES, trailer_geometry
-            from nilpotent.planning.trailer_lattice import is_lattice_model, lattice_geometry
-
-            # the trailer as a car (trailer_guide); a model with a trailer's coordinates
-            # that is not one is refused with the trailer's reason, not the car's; two
-            # trailers: the lattice search over exact motions (trailer_lattice)
-            if is_lattice_model(checker.system):
-                self.car = lattice_geometry(checker.system, checker)
-            elif checker.system.coordinate_names == TRAILER_COORDINATES:
-                self.car = trailer_geometry(checker.system, checker)
-            else:
-                self.car = car_geometry(checker.system, checker)
+            try:
+                self.car = _car(checker)
+            except OptionError:
+                if not auto:
+                    raise
+                planner = _not_car_like(checker)
         self.steering: Any = None  # trident-ocp: the plan's CasADi functions, once
         if planner == "trident-ocp" and checker is not None:
             from nilpotent.planning.trident_ocp import PIECE, BodyPathSteering
