@@ -189,3 +189,34 @@ def test_execute_refuses_an_unknown_planner():
                                       "prm", "--json"])
     assert result.exit_code == 2
     assert "--planner must be" in json.loads(result.stdout)["error"]["message"]
+
+
+@pytest.mark.parametrize(("model", "expected"), [
+    ("car", "reeds-shepp"), ("car-trailers:1", "reeds-shepp"), ("car-trailers:2", "reeds-shepp"),
+    ("car-trailers:3", "rrtconnect"), ("unicycle", "rrtconnect"), ("trident-snake", "trident-ocp"),
+])
+def test_auto_chooses_the_stage_that_applies_to_the_model(model, expected):
+    """``--planner auto``: the Reeds–Shepp guide (or lattice) where the model is car-like,
+    the trident's optimal control where CasADi is installed, RRTConnect elsewhere."""
+    from pathlib import Path
+
+    from nilpotent.planning.optimal_planner import HolonomicStage
+    from nilpotent.planning.verify import Checker
+    from nilpotent.planning.world import load_world
+
+    if expected == "trident-ocp":
+        pytest.importorskip("casadi")
+    world = None
+    if model != "unicycle":
+        world = load_world(Path(__file__).resolve().parents[1] / "examples" / "worlds"
+                           / "parking.toml")
+    stage = HolonomicStage("auto", 1.0, Checker(get_model(model), world))
+    assert stage.planner == expected
+    assert HolonomicStage("auto", 1.0).planner == "rrtconnect"  # no checker: nothing to test
+
+
+def test_an_unknown_planner_names_auto_among_the_choices():
+    from nilpotent.planning.optimal_planner import HolonomicStage
+
+    with pytest.raises(OptionError, match="auto"):
+        HolonomicStage("fastest", 1.0)
