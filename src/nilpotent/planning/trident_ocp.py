@@ -211,7 +211,7 @@ class BodyPathSteering:
         symbols = {c: q[i] for i, c in enumerate(system.coordinates)}
         cols = [ca.vertcat(*[to_casadi(e, symbols) for e in fld])
                 for fld in system.specialized_fields]
-        f = sum((cols[i] * v[i] for i in range(1, system.m)), cols[0] * v[0])
+        f: Any = sum((cols[i] * v[i] for i in range(1, system.m)), cols[0] * v[0])
         return ca.Function("leg_rates", [q, v],
                            [ca.vertcat(*[ca.jacobian(f[3 + i], q[3 + i]) for i in range(3)])])
 
@@ -271,7 +271,7 @@ class BodyPathSteering:
         out: list[tuple[np.ndarray, float, Any]] = []
         world = self.checker.world
         for poly in () if world is None else world.polygons:
-            hull = shapely.Polygon(poly).convex_hull
+            hull: Any = shapely.Polygon(poly).convex_hull
             if len(hull.exterior.coords) - 1 > VERTICES:
                 hull = hull.minimum_rotated_rectangle
             v = np.array(hull.exterior.coords)[:-1]
@@ -314,8 +314,8 @@ class BodyPathSteering:
         # the fixed ends (the start; the goal of the last piece, whose shape is fixed too)
         # keep half their clearance near them when they have less than the margin
         ends = [WORLD_MARGIN, WORLD_MARGIN]
-        for e, h in enumerate((hulls[0], hull(w) if final else None)):
-            for _, _, g in shapes if h is not None else ():
+        for e, h in enumerate((hulls[0], hull(w)) if final else (hulls[0],)):
+            for _, _, g in shapes:
                 ends[e] = min(ends[e], 0.5 * float(h.distance(g)))
         steps = np.arange(n_int)
         margins = np.where(steps < END_INTERVALS, ends[0], WORLD_MARGIN)
@@ -470,9 +470,13 @@ class BodyPathSteering:
         # its own, built once: few of them)
         wall = (NO_LIMIT if not math.isfinite(left) else
                 next((t for t in (SOLVE_SECONDS, *WALLS) if t <= 0.5 * left), WALLS[-1]))
-        lo = [min(lo + LIMIT_MARGIN, float(x[j])) for j, lo, _ in self.bounds]
-        hi = [max(hi - LIMIT_MARGIN, float(x[j])) for j, _, hi in self.bounds]
+        # the limits tightened, but not past the fixed ends (the start; the last piece's goal)
+        ends = (x, w) if final else (x,)
+        lo = [min(lo + LIMIT_MARGIN, *(float(q[j]) for q in ends)) for j, lo, _ in self.bounds]
+        hi = [max(hi - LIMIT_MARGIN, *(float(q[j]) for q in ends)) for j, _, hi in self.bounds]
         start_gap = float(np.sqrt(np.min(np.array(self._gap(x)))))
+        if final:  # the goal's own legs' gap too
+            start_gap = min(start_gap, float(np.sqrt(np.min(np.array(self._gap(w))))))
         least = min(LEG_GAP, 0.5 * start_gap) ** 2
         u0, s0 = self._guess(x, w, n_int) if warm is None else warm
         obs, a0, b0, box, margin, slots = self.separations(x, w, s0, final)
