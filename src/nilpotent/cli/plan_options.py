@@ -92,7 +92,8 @@ MaxPieceOpt = Annotated[
     float,
     typer.Option("--max-piece", metavar="D",
                  help="Longest piece of the global path steered at once (configuration space; "
-                      f"at least {MIN_MAX_PIECE:g}).",
+                      f"at least {MIN_MAX_PIECE:g}; the trident-ocp planner's pieces are up "
+                      "to max(D, 3) long).",
                  parser=bounded_float("--max-piece", 0.0, open_low=True, floor=MIN_MAX_PIECE,
                                       what=" (each piece is steered on its own: shorter "
                                            "pieces cost unbounded time and memory)")),
