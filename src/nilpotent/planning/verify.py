@@ -18,9 +18,11 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import shapely
+import shapely.ops
 
 from nilpotent.core.model.outline import Limits
 from nilpotent.core.model.system import ControlSystem
@@ -232,7 +234,7 @@ class Checker:
         clear, lim, sing = (float(v[0]) for v in self.measures(np.asarray(q)[None, :]))
         reasons = []
         if not clear > self.clearance:  # NaN: not seen as free
-            reasons.append(f"it touches an obstacle or leaves the bounds (clearance {clear:.3g})")
+            reasons.append(self._contact(np.asarray(q, dtype=float), clear))
         if lim < 0:
             names = self.system.coordinate_names
             assert self.limits is not None
@@ -251,6 +253,50 @@ class Checker:
         if self.margin_fn is not None and sing < self.singular_margin:  # type: ignore[attr-defined]
             reasons.append(f"singular margin {sing:.3g} below {self.singular_margin:g}")
         return "; ".join(reasons)
+
+    def _contact(self, q: np.ndarray, clear: float) -> str:
+        """What the configuration ``q`` touches (clearance ``clear`` at most the required):
+        each obstacle the outline overlaps, by how deep (the farthest point of the overlap
+        from the obstacle's boundary), or that it leaves the bounds, by how far; else the
+        nearest obstacle or bound within the required clearance."""
+        world = self.world
+        assert world is not None
+        geoms, radii = self.robot.parts(q[None, :])  # type: ignore[attr-defined]
+        body = shapely.union_all([shapely.buffer(g, r, 16) if r > 0 else g
+                                  for g, r in zip(geoms[0], radii[0], strict=True)])
+        found = []
+        shapes = [(shapely.Polygon(p), "the polygon obstacle with vertices " + ", ".join(
+            f"({x:.3g}, {y:.3g})" for x, y in p[:3]) + (", …" if len(p) > 3 else ""))
+            for p in world.polygons]
+        shapes += [(shapely.Point(c).buffer(r, 64), f"the disc obstacle at ({c[0]:.3g}, "
+                    f"{c[1]:.3g}) of radius {r:.3g}") for c, r in world.discs]
+        for shape, name in shapes:
+            overlap = body.intersection(shape)
+            if not overlap.is_empty:
+                # the overlap's vertices, the middles of its lines and the points of its
+                # areas farthest from their own edges (polylabel)
+                corners: Any = shapely.points(shapely.get_coordinates(overlap))
+                pts: list[Any] = list(corners)
+                for part in shapely.get_parts(overlap):
+                    if part.geom_type == "Polygon":
+                        pts.append(shapely.ops.polylabel(part, 1e-3))
+                    elif part.geom_type == "LineString":
+                        pts.append(part.interpolate(0.5, normalized=True))
+                depth = float(shapely.distance(shape.boundary, pts).max())
+                found.append(f"it overlaps {name} (by {depth:.3g})")
+        if world.bounds is not None:
+            (xlo, xhi), (ylo, yhi) = world.bounds
+            xs, ys = shapely.get_coordinates(body).T
+            out = max(xlo - xs.min(), xs.max() - xhi, ylo - ys.min(), ys.max() - yhi)
+            if out > 0:
+                found.append(f"it leaves the bounds x in [{xlo:g}, {xhi:g}], y in [{ylo:g}, "
+                             f"{yhi:g}] (by {out:.3g})")
+        if found:
+            return "; ".join(found)
+        near = min(shapes, key=lambda s: float(body.distance(s[0])), default=None)
+        what = "an obstacle or the bounds" if near is None else near[1] + " or the bounds"
+        return (f"it comes within {clear:.3g} of {what}, not more than the required "
+                f"clearance {self.clearance:g}")
 
     def constraints_near(self, q: Sequence[float] | State, within: float = NEAR) -> str:
         """What constrains the configuration ``q`` within ``within`` (model units / radians),
