@@ -298,10 +298,12 @@ class BodyPathSteering:
         distance between convex sets, Boyd & Vandenberghe, *Convex Optimization*, §8.2).
         An unused slot is a point :data:`FAR` away.
 
-        Returns ``(obstacles (2V + 1, S·N), a₀ (2, S·N), b₀ (1, S·N), box (4,), margin)``,
-        column ``s·N + k`` for slot ``s`` of interval ``k``; ``box``: the bounds less the
-        margin (``±FAR`` without bounds); ``margin``: :data:`WORLD_MARGIN`, or half the
-        clearance of the hull at ``x`` (at ``w`` too) when less.
+        Returns ``(obstacles (2V + 1, S·N), a₀ (2, S·N), b₀ (1, S·N), box (4,), margins
+        (1, S·N), S)``, column ``s·N + k`` for slot ``s`` of interval ``k`` (one unused
+        column when ``S = 0``: no obstacle within reach); ``box``: the bounds less
+        :data:`WORLD_MARGIN`, widened to hold the fixed ends (``±FAR`` without bounds);
+        ``margins``: :data:`WORLD_MARGIN`, or, on the :data:`END_INTERVALS` intervals next
+        to a fixed end (``x``; ``w`` when ``final``), half that end's clearance when less.
         """
         n_int = states.shape[1] - 1
         shapes = self._stand_ins()
@@ -391,14 +393,14 @@ class BodyPathSteering:
         roll = self._flow(n_int).mapaccum(n_int)(x, u)[0]
         states = np.hstack([x[:, None], np.array(roll)])
         if not np.all(np.isfinite(states)):
-            states = x[:, None] + (w - x)[:, None] * np.linspace(0, 1, n_int + 1)[None, :]
+            states = self.line(x, w, n_int)[1]
         return u, states
 
     def _solver(self, n_int: int, final: bool, wall: float, slots: int) -> Any:
-        """IPOPT on the problem of the module doc with ``N = n_int``, as a CasADi function
-        ``(x, w, lower limits, upper limits, least gap², U₀, X₀) ↦ (U, X, success)``
-        (:meth:`casadi.Opti.to_function`), built once per ``(N, final)`` (or for a shorter
-        ``wall``)."""
+        """IPOPT on the problem of the module doc with ``N = n_int`` and ``slots`` obstacles
+        per interval, as a CasADi function ``(x, w, lower limits, upper limits, least gap²,
+        stand-ins, box, margins, U₀, X₀, a₀, b₀) ↦ (U, X)`` (:meth:`casadi.Opti.to_function`;
+        the arrays of :meth:`separations`), built once per ``(N, final, wall, slots)``."""
         key = (self.r, self.l, tuple(self.bounds), n_int, final, wall, slots)
         if key in _SOLVERS:
             return _SOLVERS[key]
